@@ -1,0 +1,305 @@
+"""The spiking network the compiler emits: populations, projections, encoders, decoders.
+
+A :class:`SpikingNetwork` is plain data.  It says nothing about how it is
+simulated (see ``backends.reference``) or stored (``backends.artifact``); it
+only guarantees, through :meth:`SpikingNetwork.validate`, that every reference
+resolves, that axes and sizes agree, and that no zero-delay cycle exists.
+
+Examples
+--------
+>>> import numpy as np
+>>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection,
+...                           NeuronParams, Population, SpikingNetwork)
+>>> net = SpikingNetwork(
+...     name="tiny", n_steps=8,
+...     populations=[Population(id="in", shape={"i": 2}, source=True),
+...                  Population(id="out", shape={"o": 1}, params=NeuronParams(v_th=2.0))],
+...     projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
+...                                   produce=("o",), weights=np.ones((2, 1)))],
+...     encoders=[Encoder(port="x", population="in",
+...                       code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))],
+...     decoders=[Decoder(port="y", population="out", kind="spiked")])
+>>> net.validate().n_neurons, net.n_synapses
+(1, 2)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from math import prod
+
+import networkx as nx
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from compiler.snn.coding import N_PARTS, Decoder, Encoder
+from compiler.snn.neurons import NeuronParams
+from compiler.snn.projections import MatrixProjection, Projection, StencilProjection
+from ir.errors import NetworkError
+
+__all__ = ["Population", "SpikingNetwork", "PART_AXIS"]
+
+#: Name of the trailing axis that holds the parts of split values (±Re, ±Im …).
+PART_AXIS = "part"
+
+
+class Population(BaseModel):
+    """A tensor of neurons with named axes (or of spike sources fed by an encoder).
+
+    Parameters
+    ----------
+    id : str
+        Unique population id.
+    shape : dict of str to int
+        Named axes and their sizes, in memory order.
+    params : NeuronParams
+        Dynamics of every neuron (ignored for sources).
+    source : bool
+        True for a spike source driven by an :class:`Encoder` (no dynamics).
+    origin : dict
+        Provenance: ``{"node": <radar-IR node id>, "motif": <motif>}``.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    id: str = Field(min_length=1)
+    shape: dict[str, int]
+    params: NeuronParams = NeuronParams()
+    source: bool = False
+    origin: dict[str, str] = Field(default_factory=dict)
+
+    @field_validator("shape")
+    @classmethod
+    def _sizes(cls, shape: dict[str, int]) -> dict[str, int]:
+        if not shape:
+            raise ValueError("a population needs at least one axis")
+        bad = {a: n for a, n in shape.items() if n <= 0}
+        if bad:
+            raise ValueError(f"axis sizes must be positive, got {bad}")
+        return shape
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        """Axis names in memory order."""
+        return tuple(self.shape)
+
+    @property
+    def dims(self) -> tuple[int, ...]:
+        """Axis sizes in memory order."""
+        return tuple(self.shape.values())
+
+    @property
+    def size(self) -> int:
+        """Number of neurons (or sources)."""
+        return prod(self.dims)
+
+
+@dataclass(eq=False)
+class SpikingNetwork:
+    """A compiled spiking network: the simulator's and the exporters' input.
+
+    Parameters
+    ----------
+    name : str
+        Name (usually the chain's).
+    n_steps : int
+        Time steps of one frame.
+    populations, projections, encoders, decoders : iterables
+        The parts; ids must be unique within populations and within projections.
+    meta : dict
+        Free-form JSON-able metadata (calibration policy, target, …).
+    """
+
+    name: str
+    n_steps: int
+    populations: list[Population] = field(default_factory=list)
+    projections: list[Projection] = field(default_factory=list)
+    encoders: list[Encoder] = field(default_factory=list)
+    decoders: list[Decoder] = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.populations = list(self.populations)
+        self.projections = list(self.projections)
+        self.encoders = list(self.encoders)
+        self.decoders = list(self.decoders)
+
+    # ------------------------------------------------------------------ lookup
+    @property
+    def population(self) -> Mapping[str, Population]:
+        """Populations by id."""
+        return {p.id: p for p in self.populations}
+
+    @property
+    def projection(self) -> Mapping[str, Projection]:
+        """Projections by id."""
+        return {p.id: p for p in self.projections}
+
+    def incoming(self, population_id: str) -> list[Projection]:
+        """Projections that target ``population_id``, in declaration order."""
+        return [p for p in self.projections if p.target == population_id]
+
+    # ------------------------------------------------------------------ counts
+    @property
+    def n_neurons(self) -> int:
+        """Neurons (sources excluded), counting every repetition."""
+        return sum(p.size for p in self.populations if not p.source)
+
+    @property
+    def n_inputs(self) -> int:
+        """Spike sources, counting every repetition."""
+        return sum(p.size for p in self.populations if p.source)
+
+    @property
+    def n_synapses(self) -> int:
+        """Stored synapses: shared weights count once (one copy per motif)."""
+        return sum(p.n_synapses for p in self.projections)
+
+    def n_synapse_instances(self) -> int:
+        """Synapses counting every repetition and stencil position (what a chip would wire)."""
+        pops = self.population
+        total = 0
+        for p in self.projections:
+            src = pops[p.source]
+            if isinstance(p, MatrixProjection):
+                reps = src.size // prod(src.shape[a] for a in p.contract)
+                total += reps * p.n_synapses
+            else:
+                total += pops[p.target].size * p.n_taps
+        return total
+
+    # ------------------------------------------------------------------ checks
+    def validate(self) -> SpikingNetwork:
+        """Check every reference, axis and size; return ``self`` or raise :class:`NetworkError`.
+
+        Raises
+        ------
+        NetworkError
+            Naming the population, projection or port at fault.
+        """
+        if self.n_steps <= 0:
+            raise NetworkError(f"network {self.name!r}: n_steps must be positive, got "
+                               f"{self.n_steps}")
+        pops = _unique(self.populations, "population")
+        _unique(self.projections, "projection")
+        for proj in self.projections:
+            for end in (proj.source, proj.target):
+                if end not in pops:
+                    raise NetworkError(
+                        f"projection {proj.id!r}: unknown population {end!r}; known: "
+                        f"{sorted(pops)}", node=proj.id)
+            if pops[proj.target].source:
+                raise NetworkError(f"projection {proj.id!r}: target {proj.target!r} is a spike "
+                                   "source and cannot receive input", node=proj.id)
+            _check_axes(proj, pops[proj.source], pops[proj.target])
+        _check_ports(self.encoders, pops, "encoder", want_source=True)
+        _check_ports(self.decoders, pops, "decoder", want_source=None)
+        for enc in self.encoders:
+            _check_split(enc, pops[enc.population])
+        fed = {e.population for e in self.encoders}
+        for p in self.populations:
+            if p.source and p.id not in fed:
+                raise NetworkError(f"population {p.id!r}: a spike source with no encoder; add an "
+                                   "Encoder for it", node=p.id)
+        self.population_order()
+        return self
+
+    def population_order(self) -> list[str]:
+        """Population ids ordered so zero-delay projections run source before target.
+
+        Raises
+        ------
+        NetworkError
+            If zero-delay projections form a cycle (a same-step loop).
+        """
+        g = nx.DiGraph()
+        g.add_nodes_from(p.id for p in self.populations)
+        for proj in self.projections:
+            if _min_delay(proj) == 0:
+                g.add_edge(proj.source, proj.target)
+        try:
+            return list(nx.lexicographical_topological_sort(g))
+        except nx.NetworkXUnfeasible:
+            cycle = [u for u, _ in nx.find_cycle(g)]
+            raise NetworkError(
+                f"network {self.name!r}: zero-delay projections form a cycle through {cycle}; "
+                "give at least one projection on the loop a delay >= 1",
+                node=cycle[0]) from None
+
+    def is_feedforward(self) -> bool:
+        """Whether the population graph (all projections) has no cycle."""
+        g = nx.DiGraph([(p.source, p.target) for p in self.projections])
+        return nx.is_directed_acyclic_graph(g)
+
+
+def _unique(items: Iterable, what: str) -> dict:
+    out: dict = {}
+    for item in items:
+        if item.id in out:
+            raise NetworkError(f"duplicate {what} id {item.id!r}", node=item.id)
+        out[item.id] = item
+    return out
+
+
+def _min_delay(proj: Projection) -> int:
+    if proj.delays is None:
+        return 0
+    d = proj.delays
+    weights = proj.kernel if isinstance(proj, StencilProjection) else (
+        proj.weights if proj.weights is not None else proj.values)
+    live = d[weights != 0]
+    return int(live.min()) if live.size else 0
+
+
+def _check_axes(proj: Projection, src: Population, tgt: Population) -> None:
+    pid = proj.id
+    if isinstance(proj, StencilProjection):
+        if src.shape != tgt.shape:
+            raise NetworkError(f"projection {pid!r}: a stencil needs equal source and target "
+                               f"shapes, got {src.shape} and {tgt.shape}", node=pid)
+        for axis, width in zip(proj.axes, proj.kernel.shape, strict=True):
+            if axis not in src.shape:
+                raise NetworkError(f"projection {pid!r}: axis {axis!r} is not in population "
+                                   f"{src.id!r} (axes {src.axes})", node=pid)
+            if width > src.shape[axis] and proj.edge[proj.axes.index(axis)] == "wrap":
+                raise NetworkError(f"projection {pid!r}: kernel width {width} exceeds axis "
+                                   f"{axis!r} of size {src.shape[axis]} with wrap edges",
+                                   node=pid)
+        return
+    for axes, pop, role in ((proj.contract, src, "contract"), (proj.produce, tgt, "produce")):
+        missing = [a for a in axes if a not in pop.shape]
+        if missing or len(set(axes)) != len(axes):
+            raise NetworkError(f"projection {pid!r}: {role} axes {axes} must be distinct axes of "
+                               f"population {pop.id!r} (axes {pop.axes})", node=pid)
+    n_in = prod(src.shape[a] for a in proj.contract)
+    n_out = prod(tgt.shape[a] for a in proj.produce)
+    if (n_in, n_out) != proj.n_in_out:
+        raise NetworkError(f"projection {pid!r}: matrix is {proj.n_in_out} but the axes give "
+                           f"({n_in}, {n_out})", node=pid)
+    src_rep = {a: n for a, n in src.shape.items() if a not in proj.contract}
+    tgt_rep = {a: n for a, n in tgt.shape.items() if a not in proj.produce}
+    if src_rep != tgt_rep:
+        raise NetworkError(f"projection {pid!r}: repetition axes differ: source {src.id!r} has "
+                           f"{src_rep}, target {tgt.id!r} has {tgt_rep}", node=pid)
+
+
+def _check_ports(items: list, pops: dict, what: str, want_source: bool | None) -> None:
+    ports: set[str] = set()
+    for item in items:
+        if item.port in ports:
+            raise NetworkError(f"duplicate {what} port {item.port!r}", node=item.port)
+        ports.add(item.port)
+        if item.population not in pops:
+            raise NetworkError(f"{what} {item.port!r}: unknown population {item.population!r}",
+                               node=item.port)
+        if want_source is not None and pops[item.population].source != want_source:
+            raise NetworkError(f"{what} {item.port!r}: population {item.population!r} must be a "
+                               "spike source (Population(source=True))", node=item.port)
+
+
+def _check_split(enc: Encoder, pop: Population) -> None:
+    parts = N_PARTS[enc.split]
+    if parts and (pop.axes[-1] != PART_AXIS or pop.dims[-1] != parts):
+        raise NetworkError(f"encoder {enc.port!r}: split {enc.split!r} needs population "
+                           f"{pop.id!r} to end with axis {PART_AXIS!r} of size {parts}, got "
+                           f"{pop.shape}", node=enc.port)
