@@ -33,5 +33,5 @@ def shared_data() -> Path:
     if not (path / "ti_chirps" / "data_tum.npy").is_file():
         if os.environ.get("CI"):
             pytest.fail(f"real captures not found at {path}; CI must have shared/ beside the clone")
-        pytest.skip(f"real captures not found at {path}; set RADARSNN_DATA to the shared/data folder")
+        pytest.skip(f"real captures not found at {path}; set RADARSNN_DATA to shared/data")
     return path

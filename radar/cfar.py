@@ -1,0 +1,520 @@
+"""CA- and OS-CFAR in any number of dimensions, with one convention (docs/cfar.md).
+
+Convention
+----------
+* ``guard`` and ``train`` are widths **per side, per axis**. Along axis ``i`` the
+  window spans ``2*(g_i + t_i) + 1`` cells; the guard block (which includes the
+  cell under test, CUT) spans ``2*g_i + 1``. Training cells = window minus guard
+  block, e.g. guard ``[3, 3]``, train ``[4, 4]``: ``15*15 - 7*7 = 176`` cells.
+* Noise estimate: CA = mean of the training cells; OS = the **k-th largest**
+  training cell, ``k`` 1-indexed.
+* Decision: detect when ``x_CUT > alpha * noise`` (strict).
+* Edges per axis: ``"wrap"`` (circular, for Doppler) or ``"clip"`` (cells outside
+  the map are dropped). With ``n_avail < N`` training cells left, CA averages the
+  ``n_avail`` cells and OS takes the ``k_eff``-th largest of them, with
+  ``k_eff = clamp(ceil(k * n_avail / N), 1, n_avail)``.
+* CFAR runs over the last ``d`` axes, ``d`` = the length of ``guard``/``train``/``edge``
+  when any is a sequence, else ``x.ndim``; leading axes are a batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from ir.errors import RadarConfigError
+
+__all__ = [
+    "CFAR_KINDS",
+    "EDGE_MODES",
+    "training_mask",
+    "n_training",
+    "training_counts",
+    "effective_k",
+    "noise_estimate",
+    "cfar_threshold",
+    "cfar",
+]
+
+EDGE_MODES = ("wrap", "clip")
+CFAR_KINDS = ("ca", "os")
+#: Training-cell values gathered per block (float64): bounds peak memory to a few x 16 MB.
+_BLOCK_ELEMENTS = 1 << 21
+
+
+def _widths(value: object, name: str) -> tuple[int, ...] | int:
+    """A non-negative int or a tuple of them (validated, not yet broadcast)."""
+    items = value if isinstance(value, Sequence | np.ndarray) else None
+    for v in [value] if items is None else list(items):
+        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 0:
+            raise RadarConfigError(
+                f"{name}={value!r}: widths must be non-negative integers (cells per side), "
+                f"got {v!r}"
+            )
+    if items is None:
+        return int(value)  # type: ignore[arg-type]
+    if len(items) == 0:
+        raise RadarConfigError(f"{name}={value!r} is empty; give one width per CFAR axis")
+    return tuple(int(v) for v in items)
+
+
+def _stencil(
+    guard: object, train: object, edge: object = "clip", default_ndim: int = 1
+) -> tuple[tuple[int, ...], tuple[int, ...], tuple[str, ...]]:
+    """Validate and broadcast ``guard``, ``train``, ``edge`` to one entry per CFAR axis."""
+    g, t = _widths(guard, "guard"), _widths(train, "train")
+    if not isinstance(edge, str | Sequence):
+        raise RadarConfigError(f"edge={edge!r} must be 'wrap', 'clip' or a list of them per axis")
+    e = (edge,) if isinstance(edge, str) else tuple(edge)
+    for mode in e:
+        if mode not in EDGE_MODES:
+            raise RadarConfigError(
+                f"edge={edge!r}: {mode!r} is not an edge mode; use 'wrap' or 'clip' per axis"
+            )
+    lengths = {len(v) for v in (g, t) if isinstance(v, tuple)}
+    lengths |= {len(e)} if not isinstance(edge, str) else set()
+    if len(lengths) > 1:
+        raise RadarConfigError(
+            f"guard={guard!r}, train={train!r}, edge={edge!r} give different numbers of "
+            f"axes {sorted(lengths)}; give one entry per CFAR axis (or a scalar for all)"
+        )
+    d = lengths.pop() if lengths else default_ndim
+    g = g if isinstance(g, tuple) else (g,) * d
+    t = t if isinstance(t, tuple) else (t,) * d
+    e = e if len(e) == d else e * d
+    if all(ti == 0 for ti in t):
+        raise RadarConfigError(
+            f"train={train!r} leaves no training cells; give at least one axis train >= 1"
+        )
+    return g, t, e
+
+
+def _mask(guard: tuple[int, ...], train: tuple[int, ...]) -> np.ndarray:
+    window = [2 * (g + t) + 1 for g, t in zip(guard, train, strict=True)]
+    mask = np.ones(window, dtype=bool)
+    mask[tuple(slice(t, t + 2 * g + 1) for g, t in zip(guard, train, strict=True))] = False
+    return mask
+
+
+def training_mask(guard: int | Sequence[int], train: int | Sequence[int]) -> np.ndarray:
+    """The CFAR stencil: True on training cells, False on the guard block and CUT.
+
+    Parameters
+    ----------
+    guard, train : int or sequence of int
+        Widths per side, per axis. Two ints give a 1D stencil; for an n-D square
+        stencil pass lists (``[2, 2]``).
+
+    Returns
+    -------
+    ndarray of bool, shape ``(2*(g_i+t_i)+1, ...)``
+        The CUT is the centre element.
+
+    Raises
+    ------
+    RadarConfigError
+        For negative/non-integer widths, mismatched lengths or no training cell.
+
+    Examples
+    --------
+    >>> training_mask(1, 2).astype(int).tolist()
+    [1, 1, 0, 0, 0, 1, 1]
+    >>> training_mask([0, 1], [1, 0]).astype(int).tolist()
+    [[1, 1, 1], [0, 0, 0], [1, 1, 1]]
+    """
+    g, t, _ = _stencil(guard, train)
+    return _mask(g, t)
+
+
+def n_training(guard: int | Sequence[int], train: int | Sequence[int]) -> int:
+    """Number of training cells ``N = prod(2(g_i+t_i)+1) - prod(2 g_i+1)``.
+
+    Parameters
+    ----------
+    guard, train : int or sequence of int
+        As in :func:`training_mask`.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    RadarConfigError
+        As :func:`training_mask`.
+
+    Examples
+    --------
+    >>> n_training([3, 3], [4, 4]), n_training([1, 1], [1, 1]), n_training(6, 15)
+    (176, 16, 30)
+    """
+    return int(training_mask(guard, train).sum())
+
+
+def _axis_counts(n: int, reach: int, mode: str) -> np.ndarray:
+    """In-map cells at offsets -reach..reach from each position of an axis of length n."""
+    if mode == "wrap":
+        return np.full(n, 2 * reach + 1, dtype=np.int64)
+    pos = np.arange(n, dtype=np.int64)
+    return np.minimum(pos + reach, n - 1) - np.maximum(pos - reach, 0) + 1
+
+
+def training_counts(
+    shape: Sequence[int],
+    *,
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    edge: str | Sequence[str] = "clip",
+) -> np.ndarray:
+    """Training cells inside the map, ``n_avail``, for every CUT of a map of ``shape``.
+
+    Parameters
+    ----------
+    shape : sequence of int
+        The map shape (the CFAR axes only).
+    guard, train : int or sequence of int
+        Widths per side, per axis (ints apply to every axis of ``shape``).
+    edge : {"wrap", "clip"} or sequence of them
+        Edge mode per axis.
+
+    Returns
+    -------
+    ndarray of int64, shape ``shape``
+        ``prod_i win_i(c_i) - prod_i grd_i(c_i)`` where ``win_i``/``grd_i`` count the
+        in-map offsets of the window/guard block along axis ``i`` (all of them on a
+        wrap axis).
+
+    Raises
+    ------
+    RadarConfigError
+        For bad widths/edges or a ``shape`` whose length differs from theirs.
+
+    Examples
+    --------
+    >>> training_counts((6,), guard=1, train=2).tolist()
+    [2, 2, 3, 3, 2, 2]
+    >>> training_counts((6,), guard=1, train=2, edge="wrap").tolist()
+    [4, 4, 4, 4, 4, 4]
+    """
+    shape = tuple(int(s) for s in shape)
+    g, t, e = _stencil(guard, train, edge, default_ndim=len(shape))
+    if len(g) != len(shape):
+        raise RadarConfigError(
+            f"shape {shape} has {len(shape)} axes but guard/train/edge describe {len(g)}"
+        )
+    window, block = np.ones((), np.int64), np.ones((), np.int64)
+    for n, gi, ti, mode in zip(shape, g, t, e, strict=True):
+        window = np.multiply.outer(window, _axis_counts(n, gi + ti, mode))
+        block = np.multiply.outer(block, _axis_counts(n, gi, mode))
+    return window - block
+
+
+def effective_k(k: int, n_avail: object, n_total: int) -> np.ndarray:
+    """OS rank used where only ``n_avail`` of ``n_total`` training cells exist.
+
+    Parameters
+    ----------
+    k : int
+        Rank (k-th largest, 1-indexed) for the full training set.
+    n_avail : array_like of int
+        Training cells inside the map, ``1..n_total``.
+    n_total : int
+        Full training set size ``N``.
+
+    Returns
+    -------
+    ndarray of int64
+        ``k_eff = clamp(ceil(k * n_avail / N), 1, n_avail)``; equals ``k`` where
+        ``n_avail == N``.
+
+    Examples
+    --------
+    >>> effective_k(12, [16, 8, 3, 1], 16).tolist()
+    [12, 6, 3, 1]
+    """
+    n = np.asarray(n_avail, dtype=np.int64)
+    return np.clip((k * n + n_total - 1) // n_total, 1, n)
+
+
+def _ca_rows(vals: np.ndarray, n_avail: np.ndarray, k: int | None, n_total: int) -> np.ndarray:
+    """Mean of the non-NaN entries of each row."""
+    if np.all(n_avail == n_total):
+        return vals.sum(axis=-1) / n_total
+    return np.where(np.isnan(vals), 0.0, vals).sum(axis=-1) / n_avail
+
+
+def _os_rows(vals: np.ndarray, n_avail: np.ndarray, k: int, n_total: int) -> np.ndarray:
+    """k_eff-th largest non-NaN entry of each row (NaN sorts last in numpy)."""
+    full = n_avail == n_total
+    if full.all():
+        return np.partition(vals, n_total - k, axis=-1)[:, n_total - k]
+    out = np.empty(vals.shape[0])
+    if full.any():
+        out[full] = np.partition(vals[full], n_total - k, axis=-1)[:, n_total - k]
+    part = ~full
+    n_part = n_avail[part]
+    pos = n_part - effective_k(k, n_part, n_total)
+    out[part] = np.take_along_axis(np.sort(vals[part], axis=-1), pos[:, None], axis=-1)[:, 0]
+    return out
+
+
+#: Noise estimators by CFAR kind: (training values with NaN = missing, n_avail, k, N) -> noise.
+_ESTIMATORS: Mapping[str, Callable[..., np.ndarray]] = {"ca": _ca_rows, "os": _os_rows}
+
+
+def _blocks(n_batch: int, n_rows: int, rows_per_block: int) -> Iterator[tuple[slice, slice]]:
+    """(batch slice, first-map-axis slice) pairs covering the input in bounded blocks."""
+    if rows_per_block >= n_rows:
+        step = rows_per_block // n_rows
+        for b0 in range(0, n_batch, step):
+            yield slice(b0, b0 + step), slice(None)
+    else:
+        for b in range(n_batch):
+            for r0 in range(0, n_rows, rows_per_block):
+                yield slice(b, b + 1), slice(r0, r0 + rows_per_block)
+
+
+def _pad(
+    arr: np.ndarray, guard: tuple[int, ...], train: tuple[int, ...], edge: tuple[str, ...]
+) -> np.ndarray:
+    """Pad the last ``len(guard)`` axes by ``g+t`` per side: circularly or with NaN."""
+    lead = [(0, 0)] * (arr.ndim - len(guard))
+    reach = [g + t for g, t in zip(guard, train, strict=True)]
+    for mode, np_mode, fill in (
+        ("wrap", "wrap", {}),
+        ("clip", "constant", {"constant_values": np.nan}),
+    ):
+        widths = [(r, r) if m == mode else (0, 0) for r, m in zip(reach, edge, strict=True)]
+        arr = np.pad(arr, lead + widths, mode=np_mode, **fill)
+    return arr
+
+
+def _check_input(x: object) -> np.ndarray:
+    arr = np.asarray(x)
+    if np.iscomplexobj(arr):
+        raise RadarConfigError(
+            "CFAR input x is complex; apply radar.dsp.magnitude (e.g. kind='square') first"
+        )
+    if arr.ndim == 0 or arr.size == 0:
+        raise RadarConfigError(f"CFAR input x has shape {arr.shape}; it needs at least one cell")
+    arr = arr.astype(np.float64, copy=False)
+    bad = int(np.count_nonzero(~np.isfinite(arr)))
+    if bad:
+        raise RadarConfigError(
+            f"CFAR input x has {bad} non-finite value(s) (NaN/inf) of {arr.size}; "
+            "replace them (e.g. np.nan_to_num) before CFAR"
+        )
+    return arr
+
+
+def noise_estimate(
+    x: object,
+    *,
+    kind: str,
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    k: int | None = None,
+    edge: str | Sequence[str] = "clip",
+) -> np.ndarray:
+    """CFAR noise estimate for every cell: mean (CA) or k-th largest (OS) training cell.
+
+    Parameters
+    ----------
+    x : array_like of real
+        Map(s); CFAR runs over the last ``d`` axes (see module notes), the rest is a batch.
+    kind : {"ca", "os"}
+        Cell averaging or ordered statistic.
+    guard, train : int or sequence of int
+        Widths per side, per axis.
+    k : int, optional
+        OS only: rank of the noise estimate, k-th largest, ``1 <= k <= N``.
+    edge : {"wrap", "clip"} or sequence of them
+        Edge mode per axis (see module notes for the clip renormalisation).
+
+    Returns
+    -------
+    ndarray of float64, same shape as ``x``
+
+    Raises
+    ------
+    RadarConfigError
+        For complex or non-finite input, bad kind/widths/edges, ``k`` missing or outside
+        ``1..N`` for OS (or given for CA), a wrap axis shorter than the window, more
+        CFAR axes than ``x`` has, or a map so small that some cell has no training cell.
+
+    Examples
+    --------
+    >>> x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    >>> noise_estimate(x, kind="ca", guard=1, train=1, edge="wrap").tolist()
+    [4.0, 5.0, 3.0, 4.0, 2.0, 3.0]
+    >>> noise_estimate(x, kind="os", guard=0, train=2, k=1).tolist()
+    [3.0, 4.0, 5.0, 6.0, 6.0, 5.0]
+
+    Notes
+    -----
+    Pads each axis by ``g_i + t_i`` (circularly, or with NaN for clip), takes a
+    ``sliding_window_view`` and gathers the masked training cells block by block
+    (about ``2**21`` values per block), so memory stays bounded for large maps.
+    OS uses ``np.partition`` for cells with the full training set and a sort for
+    the clipped border cells; its estimate is exactly one of the inputs. CA sums
+    with numpy's reduction, whose order can depend on the block shape, so CA
+    results are exact up to ~1 ulp (exact for integer-valued maps).
+    """
+    if not isinstance(kind, str) or kind not in CFAR_KINDS:
+        raise RadarConfigError(
+            f"CFAR kind={kind!r} is not valid; use 'ca' (cell average) or 'os' (ordered statistic)"
+        )
+    arr = _check_input(x)
+    g, t, e = _stencil(guard, train, edge, default_ndim=arr.ndim)
+    d = len(g)
+    if d > arr.ndim:
+        raise RadarConfigError(
+            f"guard/train/edge describe a {d}-D window but x has only {arr.ndim} dimension(s)"
+        )
+    mask = _mask(g, t)
+    n_total = int(mask.sum())
+    if kind == "ca" and k is not None:
+        raise RadarConfigError(f"k={k!r} is only used by kind='os'; pass k=None for CA-CFAR")
+    if kind == "os" and (
+        isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= n_total
+    ):
+        raise RadarConfigError(
+            f"OS-CFAR k={k!r} must be an integer in 1..{n_total} (k-th largest of the "
+            f"N={n_total} training cells for guard={list(g)}, train={list(t)}); "
+            f"e.g. k={max(1, (3 * n_total) // 4)} (~3N/4)"
+        )
+    map_shape = arr.shape[arr.ndim - d :]
+    for i, (n, gi, ti, mode) in enumerate(zip(map_shape, g, t, e, strict=True)):
+        if mode == "wrap" and 2 * (gi + ti) + 1 > n:
+            raise RadarConfigError(
+                f"edge='wrap' on CFAR axis {i} (length {n}) needs the window "
+                f"2*(guard+train)+1 = {2 * (gi + ti) + 1} <= {n}; reduce guard/train on "
+                "that axis or use edge='clip'"
+            )
+    counts = training_counts(map_shape, guard=g, train=t, edge=e)
+    if counts.min() < 1:
+        cell = tuple(int(c) for c in np.unravel_index(np.argmin(counts), counts.shape))
+        raise RadarConfigError(
+            f"map shape {map_shape} is too small for guard={list(g)}, train={list(t)} with "
+            f"edge={list(e)}: cell {cell} has no training cell inside the map; enlarge the "
+            "map, reduce guard, or use edge='wrap'"
+        )
+
+    padded = _pad(arr, g, t, e)
+    n_batch = int(np.prod(arr.shape[: arr.ndim - d], dtype=np.int64))
+    padded = padded.reshape((n_batch, *padded.shape[arr.ndim - d :]))
+    view = sliding_window_view(padded, mask.shape, axis=tuple(range(1, d + 1)))
+    out = np.empty((n_batch, *map_shape))
+    cells_per_row = int(np.prod(map_shape[1:], dtype=np.int64))
+    rows_per_block = max(1, _BLOCK_ELEMENTS // (cells_per_row * n_total))
+    estimator = _ESTIMATORS[kind]
+    for bs, rs in _blocks(n_batch, map_shape[0], rows_per_block):
+        vals = view[bs, rs][..., mask]
+        block_shape = vals.shape[:-1]
+        n_avail = np.broadcast_to(counts[rs], block_shape).reshape(-1)
+        est = estimator(vals.reshape(-1, n_total), n_avail, k, n_total)
+        out[bs, rs] = est.reshape(block_shape)
+    return out.reshape(arr.shape)
+
+
+def _alpha(alpha: object) -> float:
+    if isinstance(alpha, bool) or not isinstance(alpha, int | float | np.integer | np.floating):
+        raise RadarConfigError(f"CFAR alpha={alpha!r} must be a real number > 0")
+    if not (np.isfinite(alpha) and alpha > 0):
+        raise RadarConfigError(
+            f"CFAR alpha={alpha!r} must be finite and > 0 (threshold = alpha * noise); a paper "
+            "that scales the CUT by a<1 instead needs alpha = 1/a (docs/cfar.md)"
+        )
+    return float(alpha)
+
+
+def cfar_threshold(
+    x: object,
+    *,
+    kind: str,
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    alpha: float,
+    k: int | None = None,
+    edge: str | Sequence[str] = "clip",
+) -> np.ndarray:
+    """Adaptive CFAR threshold ``alpha * noise_estimate(x, ...)``.
+
+    Parameters
+    ----------
+    x, kind, guard, train, k, edge
+        As in :func:`noise_estimate`.
+    alpha : float
+        Threshold factor, ``> 0`` (see ``radar.cfar_theory`` for ``alpha`` from a Pfa).
+
+    Returns
+    -------
+    ndarray of float64, same shape as ``x``
+
+    Raises
+    ------
+    RadarConfigError
+        For ``alpha <= 0`` or non-finite, and as :func:`noise_estimate`.
+
+    Examples
+    --------
+    >>> cfar_threshold([1.0, 9.0, 1.0, 1.0], kind="ca", guard=0, train=1, alpha=2.0,
+    ...                edge="wrap").tolist()
+    [10.0, 2.0, 10.0, 2.0]
+    """
+    a = _alpha(alpha)
+    return a * noise_estimate(x, kind=kind, guard=guard, train=train, k=k, edge=edge)
+
+
+def cfar(
+    x: object,
+    *,
+    kind: str = "ca",
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    alpha: float,
+    k: int | None = None,
+    edge: str | Sequence[str] = "clip",
+) -> np.ndarray:
+    """CFAR detections: ``x_CUT > alpha * noise`` (strict) for every cell.
+
+    Parameters
+    ----------
+    x : array_like of real
+        Map(s), ideally square-law (power) values for the Pfa theory to hold.
+    kind : {"ca", "os"}
+        Cell averaging (mean) or ordered statistic (k-th largest).
+    guard, train : int or sequence of int
+        Widths per side, per axis.
+    alpha : float
+        Threshold factor ``> 0``.
+    k : int, optional
+        OS only: k-th largest training cell, ``1..N``.
+    edge : {"wrap", "clip"} or sequence of them
+        Edge mode per axis.
+
+    Returns
+    -------
+    ndarray of bool, same shape as ``x``
+
+    Raises
+    ------
+    RadarConfigError
+        As :func:`cfar_threshold`.
+
+    Examples
+    --------
+    >>> x = [1.0, 1.0, 1.0, 8.0, 1.0, 1.0, 2.0]
+    >>> np.flatnonzero(cfar(x, kind="ca", guard=1, train=2, alpha=4.0)).tolist()
+    [3]
+    >>> np.flatnonzero(cfar(x, kind="os", guard=1, train=2, k=1, alpha=1.5)).tolist()
+    [3]
+
+    Notes
+    -----
+    Equal values never detect: ``x = alpha * noise`` is not a detection.
+    """
+    threshold = cfar_threshold(x, kind=kind, guard=guard, train=train, alpha=alpha, k=k, edge=edge)
+    return np.asarray(x, dtype=np.float64) > threshold
