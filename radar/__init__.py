@@ -1,0 +1,40 @@
+"""The radar domain: configurations and presets, a seeded FMCW scene simulator,
+loaders for real captures, and the conventional DSP/CFAR reference.
+
+Submodules: :mod:`radar.config`, :mod:`radar.scene`, :mod:`radar.loaders`,
+:mod:`radar.dsp`, :mod:`radar.cfar`, :mod:`radar.cfar_theory`.
+"""
+
+from radar.cfar import cfar, n_training, noise_estimate, training_mask
+from radar.cfar_theory import ca_alpha, ca_pfa, os_alpha, os_pfa
+from radar.config import PRESETS, RadarConfig, preset
+from radar.dsp import apply_window, dft, dft_matrix, magnitude, range_doppler_map, to_db
+from radar.loaders import load_openradar, load_ti_chirps
+from radar.scene import SCENE_PRESETS, Frame, Scene, Target, simulate_frame
+
+__all__ = [
+    "PRESETS",
+    "SCENE_PRESETS",
+    "Frame",
+    "RadarConfig",
+    "Scene",
+    "Target",
+    "apply_window",
+    "ca_alpha",
+    "ca_pfa",
+    "cfar",
+    "dft",
+    "dft_matrix",
+    "load_openradar",
+    "load_ti_chirps",
+    "magnitude",
+    "n_training",
+    "noise_estimate",
+    "os_alpha",
+    "os_pfa",
+    "preset",
+    "range_doppler_map",
+    "simulate_frame",
+    "to_db",
+    "training_mask",
+]
