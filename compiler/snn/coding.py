@@ -231,6 +231,15 @@ class Decoder(_Frozen):
     combine: Split = "none"
     node: str = ""
 
+    @model_validator(mode="after")
+    def _finite(self) -> Decoder:
+        bad = {k: v for k, v in (("scale", self.scale), ("offset", self.offset),
+                                 ("t_ref", self.t_ref)) if not np.isfinite(v)}
+        if bad:
+            raise ValueError(f"decoder {self.port!r}: {bad} must be finite (only `missing` may "
+                             "be NaN or infinite)")
+        return self
+
 
 def split_values(x: np.ndarray, split: Split) -> np.ndarray:
     """Spread values over a trailing ``part`` axis (see the module docstring).

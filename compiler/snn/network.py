@@ -78,6 +78,13 @@ class Population(BaseModel):
             raise ValueError(f"axis sizes must be positive, got {bad}")
         return shape
 
+    def __eq__(self, other: object) -> bool:
+        # dict equality ignores order, but the axis order is the memory layout
+        return (isinstance(other, Population) and self.axes == other.axes
+                and super().__eq__(other))
+
+    __hash__ = None  # type: ignore[assignment]  # mutable-looking dict field: not hashable
+
     @property
     def axes(self) -> tuple[str, ...]:
         """Axis names in memory order."""
@@ -194,8 +201,8 @@ class SpikingNetwork:
             _check_axes(proj, pops[proj.source], pops[proj.target])
         _check_ports(self.encoders, pops, "encoder", want_source=True)
         _check_ports(self.decoders, pops, "decoder", want_source=None)
-        for enc in self.encoders:
-            _check_split(enc, pops[enc.population])
+        for port in (*self.encoders, *self.decoders):
+            _check_split(port, pops[port.population])
         fed = {e.population for e in self.encoders}
         for p in self.populations:
             if p.source and p.id not in fed:
@@ -241,14 +248,14 @@ def _unique(items: Iterable, what: str) -> dict:
     return out
 
 
-def _min_delay(proj: Projection) -> int:
-    if proj.delays is None:
-        return 0
-    d = proj.delays
+def _min_delay(proj: Projection) -> int | None:
+    """The smallest delay of a live (non-zero) synapse; ``None`` when no synapse is live."""
     weights = proj.kernel if isinstance(proj, StencilProjection) else (
         proj.weights if proj.weights is not None else proj.values)
-    live = d[weights != 0]
-    return int(live.min()) if live.size else 0
+    live = weights != 0
+    if not live.any():
+        return None
+    return 0 if proj.delays is None else int(proj.delays[live].min())
 
 
 def _check_axes(proj: Projection, src: Population, tgt: Population) -> None:
@@ -297,9 +304,11 @@ def _check_ports(items: list, pops: dict, what: str, want_source: bool | None) -
                                "spike source (Population(source=True))", node=item.port)
 
 
-def _check_split(enc: Encoder, pop: Population) -> None:
-    parts = N_PARTS[enc.split]
+def _check_split(port: Encoder | Decoder, pop: Population) -> None:
+    how = port.split if isinstance(port, Encoder) else port.combine
+    parts = N_PARTS[how]
     if parts and (pop.axes[-1] != PART_AXIS or pop.dims[-1] != parts):
-        raise NetworkError(f"encoder {enc.port!r}: split {enc.split!r} needs population "
-                           f"{pop.id!r} to end with axis {PART_AXIS!r} of size {parts}, got "
-                           f"{pop.shape}", node=enc.port)
+        what = "encoder" if isinstance(port, Encoder) else "decoder"
+        raise NetworkError(f"{what} {port.port!r}: {how!r} needs population {pop.id!r} to end "
+                           f"with axis {PART_AXIS!r} of size {parts}, got {pop.shape}",
+                           node=port.port)

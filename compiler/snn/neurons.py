@@ -129,6 +129,13 @@ class NeuronParams(BaseModel):
             raise ValueError(f"v_th must be a positive finite number, got {value}")
         return value
 
+    @field_validator("v_reset")
+    @classmethod
+    def _finite_reset(cls, value: float) -> float:
+        if not np.isfinite(value):
+            raise ValueError(f"v_reset must be finite, got {value}")
+        return value
+
     @model_validator(mode="after")
     def _schedule(self) -> NeuronParams:
         starts = [p.start_step for p in self.phases]

@@ -300,10 +300,11 @@ class StencilProjection:
         """
         if self.delays is None:
             return {0: self.kernel}
-        return {
+        out = {
             int(d): np.where(self.delays == d, self.kernel, 0.0)
             for d in np.unique(self.delays[self.kernel != 0])
         }
+        return out or {0: np.zeros_like(self.kernel)}
 
 
 Projection = MatrixProjection | StencilProjection
