@@ -2,10 +2,12 @@
 loaders for real captures, and the conventional DSP/CFAR reference.
 
 Submodules: :mod:`radar.config`, :mod:`radar.scene`, :mod:`radar.loaders`,
-:mod:`radar.dsp`, :mod:`radar.cfar`, :mod:`radar.cfar_theory`.
+:mod:`radar.dsp`, :mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
+``radar.cfar.cfar``; the package does not re-export it, so ``radar.cfar`` stays
+the module.
 """
 
-from radar.cfar import cfar, n_training, noise_estimate, training_mask
+from radar.cfar import n_training, noise_estimate, training_mask
 from radar.cfar_theory import ca_alpha, ca_pfa, os_alpha, os_pfa
 from radar.config import PRESETS, RadarConfig, preset
 from radar.dsp import apply_window, dft, dft_matrix, magnitude, range_doppler_map, to_db
@@ -22,7 +24,6 @@ __all__ = [
     "apply_window",
     "ca_alpha",
     "ca_pfa",
-    "cfar",
     "dft",
     "dft_matrix",
     "load_openradar",

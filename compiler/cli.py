@@ -1,0 +1,154 @@
+"""The ``radarsnn`` command line: ``validate``, ``schema``, ``demo``, ``run``.
+
+Each sub-command is one small function; errors from the project's hierarchy
+are printed as one line (``error: …``) with exit status 2, never a traceback.
+
+Examples
+--------
+>>> main(["schema"]) == 0  # doctest: +ELLIPSIS
+{...
+True
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from ir.errors import RadarSNNError
+
+__all__ = ["main", "build_parser"]
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from ir import Graph
+
+    for path in args.chains:
+        graph = Graph.from_yaml(path)
+        graph.verify()
+        types = graph.infer_types()
+        if args.json:
+            print(json.dumps({"chain": str(path), "name": graph.name, "ok": True,
+                              "nodes": len(types)}))
+            continue
+        print(f"{path}: chain {graph.name!r} is valid ({len(types)} nodes)")
+        for node_id in graph.topological_order():
+            t = types[node_id]
+            axes = " × ".join(f"{a}:{n}" for a, n in t.axes.items())
+            kind = "complex" if t.complex else "real"
+            print(f"  {node_id:<12} {graph.op(node_id).op:<12} [{axes}] {kind} {t.domain}")
+    return 0
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from ir import chain_schema
+
+    text = json.dumps(chain_schema(), indent=2, sort_keys=True)
+    if args.output:
+        Path(args.output).write_text(text + "\n", encoding="utf-8")
+    else:
+        print(text)
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from compiler.demo import run_demo
+
+    report = run_demo(seed=args.seed, presets=args.preset)
+    print(report.to_json() if args.json else report.to_text())
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from backends import load
+    from backends.reference import simulate
+
+    network = load(args.artifact)
+    inputs = {}
+    ports = [e.port for e in network.encoders]
+    for item in args.input:
+        port, sep, path = item.rpartition("=")
+        if not sep:
+            if len(ports) != 1:
+                raise RadarSNNError(f"artifact {args.artifact} has input ports {ports}; name one "
+                                    f"as PORT=FILE.npy (got {item!r})")
+            port, path = ports[0], item
+        try:
+            inputs[port] = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as err:
+            raise RadarSNNError(f"cannot read input {path!r} for port {port!r}: {err}") from None
+    result = simulate(network, inputs, mode=args.mode)
+    if args.output:
+        np.savez(args.output, **result.outputs)
+    if args.json:
+        print(json.dumps({"mode": result.mode, "n_steps": result.n_steps,
+                          "spike_counts": result.spike_counts,
+                          "synaptic_events": result.synaptic_events,
+                          "outputs": {k: list(v.shape) for k, v in result.outputs.items()}},
+                         sort_keys=True))
+    else:
+        print(result.summary())
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``radarsnn`` command."""
+    parser = argparse.ArgumentParser(
+        prog="radarsnn",
+        description="Compile automotive-radar DSP chains into spiking neural networks.")
+    parser.add_argument("--version", action="version", version=f"radarsnn {_version()}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("validate", help="check chain files and print their inferred types")
+    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("--json", action="store_true", help="one JSON line per chain")
+    p.set_defaults(func=_cmd_validate)
+
+    p = sub.add_parser("schema", help="print the JSON schema of chain files")
+    p.add_argument("-o", "--output", help="write the schema to this file instead")
+    p.set_defaults(func=_cmd_schema)
+
+    p = sub.add_parser("demo", help="simulate radar scenes and run the chain on them")
+    p.add_argument("--seed", type=int, default=0, help="scene noise seed (default 0)")
+    p.add_argument("--preset", action="append", choices=["seed003", "carrada"],
+                   help="radar preset(s) to run (default: both)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=_cmd_demo)
+
+    p = sub.add_parser("run", help="simulate a saved artifact on .npy inputs")
+    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
+    p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]X.npy",
+                   help="input array per port (repeat for several ports)")
+    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
+    p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.set_defaults(func=_cmd_run)
+    return parser
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("radarsnn")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 on a radarsnn error)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except RadarSNNError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,326 @@
+"""The reference interpreter: evaluate a graph on numpy arrays with the conventional DSP.
+
+Every op type has one implementation in an explicit registry, :data:`EVAL_REGISTRY`
+(op class -> function). An implementation gets the node id, the op, the input
+arrays and the input types, and returns the node's array; arrays keep the axis
+order of their :class:`~ir.types.TensorType`. The maths is delegated to
+:mod:`radar.dsp` and :mod:`radar.cfar`, the golden references the spiking
+lowerings are checked against. (They are imported inside the implementations:
+:mod:`radar` imports :mod:`ir.errors`, which loads this package, so a top-level
+import here would be circular.)
+
+Examples
+--------
+>>> import numpy as np
+>>> from ir.graph import Graph
+>>> g = Graph.from_yaml('''
+... nodes:
+...   - {id: x, op: input, shape: {sample: 4}}
+...   - {id: spec, op: dft, input: x, axis: sample}
+...   - {id: mag, op: magnitude, input: spec}
+...   - {id: out, op: output, input: mag}
+... ''')
+>>> evaluate(g, {"x": np.array([1.0, 0.0, -1.0, 0.0])})["out"].tolist()
+[0.0, 2.0, 0.0, 2.0]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from ir.errors import IRError, RadarSNNError
+from ir.graph import Graph
+from ir.ops import (
+    CFAR,
+    DFT,
+    Classifier,
+    Linear,
+    Log,
+    Magnitude,
+    Op,
+    Output,
+    Sum,
+    Threshold,
+    Window,
+)
+from ir.types import TensorType
+
+__all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "evaluate"]
+
+Implementation = Callable[[str, Op, list[np.ndarray], list[TensorType]], np.ndarray]
+"""``impl(node_id, op, input_arrays, input_types) -> output array``."""
+
+EvalRegistry = Mapping[type[Op], Implementation]
+"""Op class -> implementation."""
+
+
+def _window(node_id: str, op: Window, args: list, types: list) -> np.ndarray:
+    from radar.dsp import apply_window
+
+    return apply_window(args[0], op.kind, axis=types[0].index(op.axis))
+
+
+def _dft(node_id: str, op: DFT, args: list, types: list) -> np.ndarray:
+    from radar.dsp import dft
+
+    ax = types[0].index(op.axis)
+    return dft(args[0], axis=ax, n_fft=op.n_fft, keep=op.keep, shift=op.shift)
+
+
+def _linear(node_id: str, op: Linear, args: list, types: list) -> np.ndarray:
+    matrix = np.asarray(op.matrix, dtype=np.float64)
+    if op.matrix_imag is not None:
+        matrix = matrix + 1j * np.asarray(op.matrix_imag, dtype=np.float64)
+    ax = types[0].index(op.axis)
+    return np.moveaxis(np.tensordot(matrix, args[0], axes=([1], [ax])), 0, ax)
+
+
+def _sum(node_id: str, op: Sum, args: list, types: list) -> np.ndarray:
+    return args[0].sum(axis=types[0].index(op.axis))
+
+
+def _magnitude(node_id: str, op: Magnitude, args: list, types: list) -> np.ndarray:
+    from radar.dsp import magnitude
+
+    return magnitude(args[0], op.kind)
+
+
+def _log(node_id: str, op: Log, args: list, types: list) -> np.ndarray:
+    from radar.dsp import to_db
+
+    return to_db(args[0], domain=types[0].domain, floor_db=op.floor_db)
+
+
+def _cfar(node_id: str, op: CFAR, args: list, types: list) -> np.ndarray:
+    from radar.cfar import cfar
+
+    win = op.window(node_id, types[0])
+    src = [types[0].index(a) for a in win.axes]
+    dst = list(range(-len(src), 0))
+    moved = np.moveaxis(args[0], src, dst)
+    det = cfar(
+        moved,
+        kind=op.kind,
+        guard=list(win.guard),
+        train=list(win.train),
+        alpha=op.alpha_for(win.n_train),
+        k=op.k,
+        edge=list(win.edge),
+    )
+    return np.moveaxis(det, dst, src)
+
+
+def _threshold(node_id: str, op: Threshold, args: list, types: list) -> np.ndarray:
+    return args[0] > op.value if op.strict else args[0] >= op.value
+
+
+def _output(node_id: str, op: Output, args: list, types: list) -> np.ndarray:
+    return args[0]
+
+
+def _classifier(node_id: str, op: Classifier, args: list, types: list) -> np.ndarray:
+    raise IRError(
+        f"node {node_id!r} (classifier): classifier evaluation is not implemented yet "
+        "(its layers come with a later issue); evaluate the graph up to its input instead",
+        node=node_id,
+    )
+
+
+EVAL_REGISTRY: dict[type[Op], Implementation] = {
+    Window: _window,
+    DFT: _dft,
+    Linear: _linear,
+    Sum: _sum,
+    Magnitude: _magnitude,
+    Log: _log,
+    CFAR: _cfar,
+    Threshold: _threshold,
+    Output: _output,
+    Classifier: _classifier,
+}
+"""The reference implementation of every op that computes (graph inputs take the given arrays)."""
+
+
+def evaluate(
+    graph: Graph,
+    inputs: Mapping[str, object],
+    *,
+    registry: EvalRegistry | None = None,
+) -> dict[str, np.ndarray]:
+    """Evaluate every node of a verified graph on the given input arrays.
+
+    Parameters
+    ----------
+    graph : Graph
+        The chain; it is verified first.
+    inputs : mapping of str to array_like
+        One array per graph input node (``graph.input_ids()``), shaped as its
+        declared axes: complex for complex inputs, real otherwise, boolean for
+        ``mask`` inputs, non-negative for ``power`` inputs, all finite.
+    registry : mapping of op class to implementation, optional
+        Implementations that extend or override :data:`EVAL_REGISTRY`.
+
+    Returns
+    -------
+    dict[str, ndarray]
+        Every node's value keyed by node id, in topological order: float64,
+        complex128, or bool for masks; axes in the order of the node's type.
+
+    Raises
+    ------
+    IRError
+        If the graph does not verify, an input is missing or extra, an input array
+        has the wrong shape, dtype or non-finite values (naming the input node), an
+        op has no implementation, an implementation fails or returns an array that
+        does not match the node's type (naming the node), or the graph holds a
+        ``classifier`` (not implemented yet).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ir.ops import Input, Threshold, Output
+    >>> g = Graph()
+    >>> g.add(Input(shape={"range": 3}, domain="power"), id="x")
+    'x'
+    >>> g.add(Threshold(value=1.0, strict=False), inputs="x", id="det")
+    'det'
+    >>> g.add(Output(), inputs="det", id="out")
+    'out'
+    >>> evaluate(g, {"x": [0.5, 1.0, 2.0]})["out"].tolist()
+    [False, True, True]
+    >>> evaluate(g, {"y": [0.5, 1.0, 2.0]})
+    Traceback (most recent call last):
+    ...
+    ir.errors.IRError: graph 'chain': missing input array(s) for ['x']; got arrays for ['y'] \
+which are not graph inputs (inputs: ['x'])
+    """
+    impls = EVAL_REGISTRY if registry is None else {**EVAL_REGISTRY, **registry}
+    graph.verify()
+    types = graph.infer_types()
+    _check_input_names(graph, inputs)
+    values: dict[str, np.ndarray] = {}
+    for node_id, out_type in types.items():
+        op = graph.op(node_id)
+        if op.arity == 0:
+            values[node_id] = check_input(node_id, out_type, inputs[node_id])
+            continue
+        impl = impls.get(type(op))
+        if impl is None:
+            raise IRError(
+                f"node {node_id!r} ({op.op}): no implementation for {type(op).__name__}; "
+                "pass registry={OpClass: function} to evaluate",
+                node=node_id,
+            )
+        in_ids = graph.inputs_of(node_id)
+        try:
+            out = impl(node_id, op, [values[i] for i in in_ids], [types[i] for i in in_ids])
+        except IRError:
+            raise
+        except RadarSNNError as err:
+            raise IRError(f"node {node_id!r} ({op.op}): {err}", node=node_id) from err
+        values[node_id] = _check_output(node_id, op, out_type, out)
+    return values
+
+
+def _check_input_names(graph: Graph, inputs: Mapping[str, object]) -> None:
+    expected = graph.input_ids()
+    missing = [i for i in expected if i not in inputs]
+    extra = [k for k in inputs if k not in expected]
+    if missing or extra:
+        parts = []
+        if missing:
+            parts.append(f"missing input array(s) for {missing}")
+        if extra:
+            parts.append(f"got arrays for {extra} which are not graph inputs")
+        raise IRError(
+            f"graph {graph.name!r}: {'; '.join(parts)} (inputs: {expected})",
+            node=missing[0] if missing else str(extra[0]),
+        )
+
+
+def check_input(node_id: str, t: TensorType, value: object) -> np.ndarray:
+    """Validate one input array against its declared type and return a fresh copy.
+
+    Parameters
+    ----------
+    node_id : str
+        The input node (named in errors).
+    t : TensorType
+        Its declared type.
+    value : array_like
+        The supplied values.
+
+    Returns
+    -------
+    ndarray
+        float64, complex128 (complex types) or bool (``mask``), shape ``t.shape``.
+
+    Raises
+    ------
+    IRError
+        Wrong shape, complex given for a real input or vice versa, a non-boolean
+        mask, a non-numeric array, non-finite values, or negative powers.
+
+    Examples
+    --------
+    >>> t = TensorType(axes={"chirp": 2, "sample": 3})
+    >>> check_input("adc", t, np.zeros((3, 2)))
+    Traceback (most recent call last):
+    ...
+    ir.errors.IRError: input 'adc': array shape (3, 2) does not match the declared axes \
+{'chirp': 2, 'sample': 3}, shape (2, 3)
+    """
+    arr = np.asarray(value)
+    where = f"input {node_id!r}"
+    if arr.shape != t.shape:
+        raise IRError(
+            f"{where}: array shape {arr.shape} does not match the declared axes "
+            f"{dict(t.axes)}, shape {t.shape}",
+            node=node_id,
+        )
+    if t.domain == "mask":
+        if arr.dtype != np.bool_:
+            raise IRError(f"{where}: a mask input needs a bool array; got {arr.dtype}",
+                          node=node_id)
+        return arr.astype(np.bool_, copy=True)
+    if arr.dtype.kind not in "iufc":
+        raise IRError(f"{where}: needs a numeric array; got dtype {arr.dtype}", node=node_id)
+    if np.iscomplexobj(arr) != t.complex:
+        raise IRError(
+            f"{where}: declared {'complex' if t.complex else 'real'} but the array is "
+            f"{arr.dtype}; "
+            + ("pass complex I/Q samples (e.g. x.astype(complex))" if t.complex
+               else "declare complex: true or pass a real array"),
+            node=node_id,
+        )
+    arr = arr.astype(np.complex128 if t.complex else np.float64, copy=True)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise IRError(
+            f"{where}: {int(bad.sum())} non-finite value(s) (NaN/Inf) of {arr.size}, first at "
+            f"index {first}; clean the data (e.g. np.nan_to_num) first",
+            node=node_id,
+        )
+    if t.domain == "power" and (arr < 0).any():
+        raise IRError(
+            f"{where}: a power input must be >= 0; minimum is {arr.min():.6g}", node=node_id
+        )
+    return arr
+
+
+
+
+def _check_output(node_id: str, op: Op, t: TensorType, out: object) -> np.ndarray:
+    """Cast an implementation's result to the node's dtype, refusing the wrong shape."""
+    arr = np.asarray(out)
+    dtype = np.bool_ if t.domain == "mask" else np.complex128 if t.complex else np.float64
+    if arr.shape != t.shape or (np.iscomplexobj(arr) and not t.complex):
+        raise IRError(
+            f"node {node_id!r} ({op.op}): the implementation returned a {arr.dtype} array of "
+            f"shape {arr.shape}, but the node's type is {t!r}; fix the implementation",
+            node=node_id,
+        )
+    return arr.astype(dtype, copy=False)

@@ -1,0 +1,131 @@
+"""The pydantic base of every IR record (tensor types and ops), and name rules.
+
+Every IR record is a frozen pydantic model that forbids unknown fields. Building
+one with bad values raises :class:`~ir.errors.IRError` (not pydantic's
+``ValidationError``), naming the record and each offending field, so callers
+catch one exception hierarchy.
+
+Examples
+--------
+>>> from ir.model import IRModel
+>>> class Point(IRModel):
+...     x: int
+>>> Point(x=1)
+Point(x=1)
+>>> try:
+...     Point(x="one")
+... except IRError as err:
+...     print(err)
+Point: field 'x': Input should be a valid integer, unable to parse string as an integer (got 'one')
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, StringConstraints, ValidationError
+
+from ir.errors import IRError
+
+__all__ = ["NAME_PATTERN", "IRModel", "Name", "describe_validation_error", "is_name"]
+
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_\-]*$"
+"""Node ids and axis names: a letter or ``_``, then letters, digits, ``_`` or ``-``."""
+
+Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN)]
+"""A node id or axis name (see :data:`NAME_PATTERN`)."""
+
+_NAME_RE = re.compile(NAME_PATTERN)
+
+
+def describe_validation_error(err: ValidationError) -> str:
+    """One line per problem of a pydantic ``ValidationError``: field, reason, value.
+
+    Parameters
+    ----------
+    err : pydantic.ValidationError
+        The error to describe.
+
+    Returns
+    -------
+    str
+        ``"field 'a.b': <reason> (got <value>)"`` entries joined by ``"; "``;
+        problems not tied to one field read ``"<reason>"``.
+
+    Examples
+    --------
+    >>> from pydantic import BaseModel, ValidationError
+    >>> class M(BaseModel):
+    ...     n: int
+    >>> try:
+    ...     M(n="x")
+    ... except ValidationError as err:
+    ...     print(describe_validation_error(err))
+    field 'n': Input should be a valid integer, unable to parse string as an integer (got 'x')
+    """
+    items = [
+        (tuple(str(p) for p in item["loc"] if not _is_union_tag(p)), item)
+        for item in err.errors(include_url=False)
+    ]
+    locs = {loc for loc, _ in items}
+    parts: dict[tuple[str, ...], str] = {}
+    for loc, item in items:
+        # Union members fail together: keep the first reason per field, and prefer the
+        # member that got furthest (a deeper location) over a bare type mismatch.
+        if loc in parts or any(o[: len(loc)] == loc and len(o) > len(loc) for o in locs):
+            continue
+        reason = item["msg"].removeprefix("Value error, ")
+        got = "" if item["type"] == "missing" else f" (got {_short(item.get('input'))})"
+        parts[loc] = f"field {'.'.join(loc)!r}: {reason}{got}" if loc else reason
+    return "; ".join(parts.values())
+
+
+_UNION_TAGS = frozenset({"int", "float", "str", "bool", "none", "list", "tuple", "dict"})
+
+
+def _is_union_tag(part: object) -> bool:
+    """Whether a location part names a union member (``"int"``, ``"tuple[int, ...]"``)."""
+    return isinstance(part, str) and (
+        "[" in part or part in _UNION_TAGS or part.startswith("constrained-")
+    )
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def is_name(text: object) -> bool:
+    """Whether ``text`` is a valid node id / axis name.
+
+    Examples
+    --------
+    >>> is_name("range"), is_name("2nd"), is_name("a b")
+    (True, False, False)
+    """
+    return isinstance(text, str) and _NAME_RE.match(text) is not None
+
+
+class IRModel(BaseModel):
+    """Frozen pydantic record whose construction errors are :class:`IRError`.
+
+    Raises
+    ------
+    IRError
+        When a field is missing, unknown, of the wrong type or out of range;
+        the message names the record class and every bad field.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    def __init__(self, **data: Any) -> None:
+        try:
+            super().__init__(**data)
+        except ValidationError as err:
+            raise IRError(f"{self.describe_kind()}: {describe_validation_error(err)}") from err
+
+    @classmethod
+    def describe_kind(cls) -> str:
+        """How errors name this kind of record (the class name by default)."""
+        return cls.__name__

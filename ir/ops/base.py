@@ -1,0 +1,111 @@
+"""The base class of every op: arity, the op name, and helpers for type checks.
+
+An op is a frozen record of parameters with a literal ``op`` field (its name in
+chain files) and a pure :meth:`Op.infer` that maps input types to the output
+type, raising :class:`~ir.errors.IRError` that names the node, the op and what
+is wrong. Ops carry no evaluation code: the reference semantics live in
+:mod:`ir.evaluate`, registered per op type.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+from ir.errors import IRError
+from ir.model import IRModel
+from ir.types import TensorType
+
+__all__ = ["Op"]
+
+
+class Op(IRModel):
+    """Base of all ops.
+
+    Class attributes
+    ----------------
+    arity : int
+        Number of inputs the op takes (0 for graph inputs).
+    is_output : bool
+        Whether the op marks a graph output.
+    """
+
+    arity: ClassVar[int] = 1
+    is_output: ClassVar[bool] = False
+
+    op: str
+
+    @classmethod
+    def op_name(cls) -> str:
+        """The op's name in chain files (the default of its ``op`` field)."""
+        return cls.model_fields["op"].default
+
+    @classmethod
+    def describe_kind(cls) -> str:
+        return f"op {cls.op_name()!r}"
+
+    def params(self) -> dict[str, Any]:
+        """Parameters that differ from their defaults, as JSON-compatible values.
+
+        Examples
+        --------
+        >>> from ir.ops.linear import Window
+        >>> Window(axis="sample").params()
+        {'axis': 'sample'}
+        """
+        dumped = self.model_dump(mode="json", exclude_defaults=True)
+        dumped.pop("op", None)
+        return dumped
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        """The output type of this op applied to ``inputs`` (overridden by each op)."""
+        raise NotImplementedError(f"{type(self).__name__}.infer")
+
+    # -- helpers for infer -------------------------------------------------------------
+
+    def fail(self, node_id: str, message: str) -> IRError:
+        """An :class:`IRError` reading ``node '<id>' (<op>): <message>``."""
+        return IRError(f"node {node_id!r} ({self.op}): {message}", node=node_id)
+
+    def expect_inputs(self, node_id: str, inputs: Sequence[TensorType]) -> list[TensorType]:
+        """Check the number of inputs against :attr:`arity` and return them as a list."""
+        if len(inputs) != self.arity:
+            plural = "input" if self.arity == 1 else "inputs"
+            raise self.fail(
+                node_id,
+                f"takes {self.arity} {plural}, got {len(inputs)}; "
+                + ("remove 'input'/'inputs'" if self.arity == 0 else "fix 'input'/'inputs'"),
+            )
+        return list(inputs)
+
+    def axis_index(self, node_id: str, t: TensorType, axis: str, field: str = "axis") -> int:
+        """Dimension index of ``axis`` in ``t``; unknown axes name the available ones."""
+        if axis not in t.axes:
+            raise self.fail(
+                node_id, f"{field} {axis!r} is not an axis of the input; available axes: {t.names}"
+            )
+        return t.names.index(axis)
+
+    def check_new_axis(self, node_id: str, t: TensorType, old: str, new: str, field: str) -> None:
+        """Reject renaming ``old`` to ``new`` when ``new`` is another axis of ``t``."""
+        if new != old and new in t.axes:
+            raise self.fail(
+                node_id,
+                f"{field} {new!r} duplicates an existing axis name (input axes {t.names}); "
+                "pick a new name",
+            )
+
+    def check_value(
+        self, node_id: str, t: TensorType, domains: Sequence[str], *, allow_complex: bool
+    ) -> None:
+        """Reject complex inputs (unless allowed) and inputs whose domain is not in ``domains``."""
+        if t.complex and not allow_complex:
+            raise self.fail(
+                node_id,
+                f"input is complex; {self.op} takes real values (add a magnitude node before it)",
+            )
+        if t.domain not in domains:
+            raise self.fail(
+                node_id,
+                f"input domain {t.domain!r} is not accepted; {self.op} takes {list(domains)}",
+            )

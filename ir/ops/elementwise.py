@@ -1,0 +1,81 @@
+"""Elementwise ops: ``magnitude`` and ``log`` (decibels)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Literal
+
+from pydantic import FiniteFloat
+
+from ir.ops.base import Op
+from ir.types import TensorType
+
+__all__ = ["Log", "Magnitude", "MagnitudeKind"]
+
+MagnitudeKind = Literal["l2", "l1", "square"]
+
+
+class Magnitude(Op):
+    r"""Magnitude of each (complex or real) amplitude :math:`x = a + ib`.
+
+    ===========  ==============================  ===============
+    kind         :math:`y`                       output domain
+    ===========  ==============================  ===============
+    ``l2``       :math:`\sqrt{a^2 + b^2}`        amplitude
+    ``l1``       :math:`|a| + |b|`               amplitude
+    ``square``   :math:`a^2 + b^2`               power
+    ===========  ==============================  ===============
+
+    Parameters
+    ----------
+    kind : {"l2", "l1", "square"}, default "l2"
+
+    Notes
+    -----
+    Input: ``amplitude``, real or complex. Output: real, same axes.
+
+    Examples
+    --------
+    >>> t = TensorType(axes={"range": 8}, complex=True)
+    >>> Magnitude(kind="square").infer("pow", [t])
+    TensorType(axes={'range': 8}, complex=False, domain='power')
+    """
+
+    op: Literal["magnitude"] = "magnitude"
+    kind: MagnitudeKind = "l2"
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        (t,) = self.expect_inputs(node_id, inputs)
+        self.check_value(node_id, t, ("amplitude",), allow_complex=True)
+        domain = "power" if self.kind == "square" else "amplitude"
+        return t.replace(complex=False, domain=domain)
+
+
+class Log(Op):
+    r"""Level in decibels, floored: amplitude :math:`y = \max(20\log_{10}|x|, f)`,
+    power :math:`y = \max(10\log_{10} x, f)` with :math:`f` = ``floor_db``.
+
+    Parameters
+    ----------
+    floor_db : float, default -300.0
+        Lowest output level; zeros (and values below it) map to ``floor_db``.
+
+    Notes
+    -----
+    Input: real ``amplitude`` or ``power`` (the domain picks 20 or 10 log10).
+    Output: ``db``, same axes. Complex input is rejected (take a magnitude first).
+
+    Examples
+    --------
+    >>> t = TensorType(axes={"range": 8}, domain="power")
+    >>> Log().infer("db", [t]).domain
+    'db'
+    """
+
+    op: Literal["log"] = "log"
+    floor_db: FiniteFloat = -300.0
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        (t,) = self.expect_inputs(node_id, inputs)
+        self.check_value(node_id, t, ("amplitude", "power"), allow_complex=False)
+        return t.replace(domain="db")

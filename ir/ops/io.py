@@ -1,0 +1,102 @@
+"""Graph inputs and outputs: ``adc_input``, ``input`` and ``output``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar, Literal
+
+from pydantic import Field, PositiveInt, model_validator
+
+from ir.model import Name
+from ir.ops.base import Op
+from ir.types import Domain, TensorType
+
+__all__ = ["AdcInput", "Input", "Output"]
+
+
+class AdcInput(Op):
+    """Raw FMCW ADC samples of one frame: ``x[..., chirp, sample]`` amplitudes.
+
+    Parameters
+    ----------
+    shape : dict[str, int]
+        Axis name -> size in array order, e.g. ``{"rx": 4, "chirp": 64, "sample": 256}``.
+    complex : bool, default False
+        True for I/Q (complex baseband) capture, False for real-only ADCs.
+
+    Notes
+    -----
+    Output type: ``TensorType(axes=shape, complex=complex, domain="amplitude")``.
+    Takes no inputs; its value is supplied to :func:`ir.evaluate.evaluate`.
+
+    Examples
+    --------
+    >>> AdcInput(shape={"chirp": 2, "sample": 4}, complex=True).infer("adc", [])
+    TensorType(axes={'chirp': 2, 'sample': 4}, complex=True, domain='amplitude')
+    """
+
+    arity: ClassVar[int] = 0
+    op: Literal["adc_input"] = "adc_input"
+    shape: dict[Name, PositiveInt] = Field(min_length=1)
+    complex: bool = False
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        self.expect_inputs(node_id, inputs)
+        return TensorType(axes=self.shape, complex=self.complex, domain="amplitude")
+
+
+class Input(Op):
+    """A generic named tensor fed to the graph (e.g. a stored range-Doppler map).
+
+    Parameters
+    ----------
+    shape : dict[str, int]
+        Axis name -> size in array order.
+    complex : bool, default False
+        Whether values are complex (only with domain ``amplitude``).
+    domain : {"amplitude", "power", "db", "mask"}, default "amplitude"
+        What the values mean.
+
+    Notes
+    -----
+    Output type: ``TensorType(axes=shape, complex=complex, domain=domain)``.
+
+    Examples
+    --------
+    >>> Input(shape={"range": 8}, domain="power").infer("rd", []).domain
+    'power'
+    """
+
+    arity: ClassVar[int] = 0
+    op: Literal["input"] = "input"
+    shape: dict[Name, PositiveInt] = Field(min_length=1)
+    complex: bool = False
+    domain: Domain = "amplitude"
+
+    @model_validator(mode="after")
+    def _real_unless_amplitude(self) -> Input:
+        if self.complex and self.domain != "amplitude":
+            raise ValueError(f"domain {self.domain!r} is real; only 'amplitude' may be complex")
+        return self
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        self.expect_inputs(node_id, inputs)
+        return TensorType(axes=self.shape, complex=self.complex, domain=self.domain)
+
+
+class Output(Op):
+    """Marks its input as a graph output: ``y = x`` (identity).
+
+    Examples
+    --------
+    >>> t = TensorType(axes={"range": 8}, domain="mask")
+    >>> Output().infer("out", [t]) == t
+    True
+    """
+
+    is_output: ClassVar[bool] = True
+    op: Literal["output"] = "output"
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        (t,) = self.expect_inputs(node_id, inputs)
+        return t
