@@ -6,6 +6,7 @@ from compiler.snn.coding import (
     Encoder,
     LatencyCode,
     RateCode,
+    Split,
     combine_parts,
     split_values,
 )
@@ -27,6 +28,7 @@ __all__ = [
     "Projection",
     "RateCode",
     "SpikingNetwork",
+    "Split",
     "StencilProjection",
     "combine_parts",
     "split_values",

@@ -203,6 +203,14 @@ class SpikingNetwork:
         _check_ports(self.decoders, pops, "decoder", want_source=None)
         for port in (*self.encoders, *self.decoders):
             _check_split(port, pops[port.population])
+        fed_twice = [e.population for e in self.encoders]
+        for pid in {p for p in fed_twice if fed_twice.count(p) > 1}:
+            raise NetworkError(f"population {pid!r}: fed by more than one encoder", node=pid)
+        for dec in self.decoders:
+            if dec.kind == "membrane" and pops[dec.population].source:
+                raise NetworkError(f"decoder {dec.port!r}: a spike source {dec.population!r} has "
+                                   "no membrane; use kind 'spike_time', 'count' or 'spiked'",
+                                   node=dec.port)
         fed = {e.population for e in self.encoders}
         for p in self.populations:
             if p.source and p.id not in fed:
@@ -261,9 +269,10 @@ def _min_delay(proj: Projection) -> int | None:
 def _check_axes(proj: Projection, src: Population, tgt: Population) -> None:
     pid = proj.id
     if isinstance(proj, StencilProjection):
-        if src.shape != tgt.shape:
-            raise NetworkError(f"projection {pid!r}: a stencil needs equal source and target "
-                               f"shapes, got {src.shape} and {tgt.shape}", node=pid)
+        if src.shape != tgt.shape:  # same axes and sizes; matched by name, in any order
+            raise NetworkError(f"projection {pid!r}: a stencil needs the same axes and sizes "
+                               f"on source and target, got {src.shape} and {tgt.shape}",
+                               node=pid)
         for axis, width in zip(proj.axes, proj.kernel.shape, strict=True):
             if axis not in src.shape:
                 raise NetworkError(f"projection {pid!r}: axis {axis!r} is not in population "

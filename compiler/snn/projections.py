@@ -16,7 +16,8 @@ while its weights are stored once:
     one kernel correlated over the map axes ``axes`` of a source and a target
     of the same shape (CFAR windows): ``I[x] = Σ_o K[o] s[x + o]``, offsets
     ``o`` centred on the kernel middle, ``wrap`` or ``clip`` (no synapse)
-    beyond the map per axis; optional per-tap delays.
+    beyond the map per axis; optional per-tap delays.  Source and target have
+    the same axes and sizes, matched by name (their memory order may differ).
 
 A spike emitted at step ``t`` through a synapse of delay ``d`` enters the
 target's ``I[t + d]``.  ``d = 0`` delivers in the same step (the simulator
@@ -29,7 +30,7 @@ Examples
 >>> p = MatrixProjection(id="dft", source="x", target="y", contract=("sample",),
 ...                      produce=("range",), weights=np.eye(4))
 >>> p.n_synapses, p.n_in, p.n_out
-(16, 4, 4)
+(4, 4, 4)
 >>> k = StencilProjection(id="cfar", source="x", target="y", axes=("range",),
 ...                       kernel=np.array([-1.0, 0.0, 2.0, 0.0, -1.0]), edge=("wrap",))
 >>> k.n_taps, k.radius
@@ -181,8 +182,8 @@ class MatrixProjection:
 
     @property
     def n_synapses(self) -> int:
-        """Stored synapses of one instance (non-zero weights; dense counts every entry)."""
-        return int(self.weights.size if self.weights is not None else self.values.size)
+        """Stored synapses of one instance: the non-zero weights (dense or sparse)."""
+        return int(np.count_nonzero(self.weights if self.weights is not None else self.values))
 
     @property
     def max_delay(self) -> int:

@@ -1,0 +1,135 @@
+r"""Output decoding: from a population's activity to the values of an output port.
+
+Per neuron, by the decoder's ``kind`` (registry :data:`DECODERS`):
+
+==============  ===========================================================
+``spike_time``  ``scale·(t_ref − t_s) + offset`` at the first spike step
+                ``t_s``; ``missing`` where the neuron never fired
+``count``       ``scale·count + offset``
+``membrane``    ``scale·v + offset`` with ``v`` after the last step
+``spiked``      ``1.0`` where the neuron fired, else ``0.0``
+==============  ===========================================================
+
+then :func:`~compiler.snn.combine_parts` folds the trailing ``part`` axis.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from backends.reference.result import Activity
+from compiler.snn.coding import N_PARTS, Decoder, combine_parts
+from compiler.snn.network import PART_AXIS, SpikingNetwork
+from ir.errors import NetworkError
+
+__all__ = ["DECODERS", "decode_outputs", "check_decoders"]
+
+
+def _spike_time(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+    t = act.first_spike[pid]
+    return np.where(t >= 0, dec.scale * (dec.t_ref - t.astype(np.float64)) + dec.offset,
+                    dec.missing)
+
+
+def _count(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+    return dec.scale * act.counts[pid].astype(np.float64) + dec.offset
+
+
+def _membrane(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+    return dec.scale * act.membrane[pid].astype(np.float64) + dec.offset
+
+
+def _spiked(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+    return (act.counts[pid] > 0).astype(np.float64)
+
+
+#: Decoding functions by decoder ``kind``: ``(decoder, activity, population) -> (frames, size)``.
+DECODERS: dict[str, Callable[[Decoder, Activity, str], np.ndarray]] = {
+    "spike_time": _spike_time,
+    "count": _count,
+    "membrane": _membrane,
+    "spiked": _spiked,
+}
+
+
+def check_decoders(network: SpikingNetwork) -> None:
+    """Refuse decoders the simulator cannot honour.
+
+    Raises
+    ------
+    NetworkError
+        A ``membrane`` decoder on a spike source (no membrane), or a ``combine``
+        whose population does not end with a ``part`` axis of the right size.
+
+    Examples
+    --------
+    >>> from compiler.snn import Decoder, Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="n", n_steps=2,
+    ...     populations=[Population(id="a", shape={"i": 2})],
+    ...     decoders=[Decoder(port="y", population="a", kind="count", combine="re_im")])
+    >>> try:
+    ...     check_decoders(net)
+    ... except NetworkError as err:
+    ...     print(err.node, "|", str(err)[:40])
+    y | decoder 'y': combine 're_im' needs popul
+    """
+    pops = network.population
+    for dec in network.decoders:
+        pop = pops[dec.population]
+        if dec.kind == "membrane" and pop.source:
+            raise NetworkError(f"decoder {dec.port!r}: population {pop.id!r} is a spike source "
+                               "and has no membrane; decode 'spike_time', 'count' or 'spiked'",
+                               node=dec.port)
+        parts = N_PARTS[dec.combine]
+        if parts and (pop.axes[-1] != PART_AXIS or pop.dims[-1] != parts):
+            raise NetworkError(f"decoder {dec.port!r}: combine {dec.combine!r} needs population "
+                               f"{pop.id!r} to end with axis {PART_AXIS!r} of size {parts}, got "
+                               f"{pop.shape}", node=dec.port)
+
+
+def decode_outputs(
+    network: SpikingNetwork,
+    activity: Activity,
+    framed: bool,
+    decoders: Mapping[str, Callable[[Decoder, Activity, str], np.ndarray]] = DECODERS,
+) -> dict[str, np.ndarray]:
+    """Decode every output port of ``network`` from ``activity``.
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        The simulated network.
+    activity : Activity
+        The engine's record.
+    framed : bool
+        Keep the leading frames axis (the inputs had one).
+    decoders : mapping
+        Decoding function per kind (default :data:`DECODERS`).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Values per port: ``(n_frames, *value_shape)`` or ``value_shape``.
+
+    Examples
+    --------
+    >>> from compiler.snn import Decoder, Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="n", n_steps=8,
+    ...     populations=[Population(id="a", shape={"i": 2})],
+    ...     decoders=[Decoder(port="t", population="a", kind="spike_time", t_ref=8.0,
+    ...                       missing=-1.0)])
+    >>> act = Activity(first_spike={"a": np.array([[3, -1]])}, counts={}, membrane={},
+    ...                synaptic_events={})
+    >>> decode_outputs(net, act, framed=False)["t"].tolist()
+    [5.0, -1.0]
+    """
+    pops = network.population
+    out = {}
+    for dec in network.decoders:
+        pop = pops[dec.population]
+        y = decoders[dec.kind](dec, activity, pop.id)
+        y = combine_parts(y.reshape(-1, *pop.dims), dec.combine)
+        out[dec.port] = y if framed else y[0]
+    return out

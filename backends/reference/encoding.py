@@ -1,0 +1,232 @@
+r"""Input checking and spike trains of the source populations.
+
+:func:`encode_inputs` checks ``simulate``'s inputs against the network's
+encoders (ports, shapes, dtypes, finiteness), splits signed/complex values onto
+the ``part`` axis and returns one spike *train* per source population, built by
+the encoder's code type through the registry :data:`TRAINS`:
+
+:class:`LatencyTrain`
+    one spike per value at ``code.spike_steps(x)`` when that step is before the
+    window end ``t_max`` (and before ``n_steps``).
+:class:`RateTrain`
+    regular trains: a spike at step ``t`` iff
+    ``floor((t+1)·r + φ) > floor(t·r + φ)`` (``code.spikes_at``), over all steps.
+
+A train answers ``events_at(t)`` (flat indices into ``(frames, size)``,
+ascending) for the step engine and ``all_events()`` for the closed form; both
+evaluate the code's own functions, so the two engines see identical spikes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, split_values
+from compiler.snn.network import SpikingNetwork
+from ir.errors import NetworkError, SimulationError
+
+__all__ = ["LatencyTrain", "RateTrain", "TRAINS", "encode_inputs", "value_shape"]
+
+_CHUNK_ELEMENTS = 1 << 22
+
+
+@dataclass(frozen=True, eq=False)
+class LatencyTrain:
+    """At most one spike per source neuron, at its encoded step.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from compiler.snn import LatencyCode
+    >>> tr = LatencyTrain.build(LatencyCode(t_max=4, x_min=0.0, x_max=1.0),
+    ...                         np.array([[1.0, 0.5, 0.0]]), n_steps=8)
+    >>> tr.events_at(0).tolist(), tr.events_at(2).tolist(), [a.tolist() for a in tr.all_events()]
+    ([0], [1], [[0, 1], [0, 2]])
+    """
+
+    flat: np.ndarray
+    steps: np.ndarray
+    bounds: np.ndarray
+
+    @classmethod
+    def build(cls, code: LatencyCode, values: np.ndarray, n_steps: int) -> LatencyTrain:
+        """Spike steps of ``values`` (shape ``(frames, size)``) under ``code``."""
+        steps = code.spike_steps(values).ravel()
+        flat = np.flatnonzero(steps < min(code.t_max, n_steps))
+        order = np.argsort(steps[flat], kind="stable")
+        flat, steps = flat[order], steps[flat][order]
+        return cls(flat, steps, np.searchsorted(steps, np.arange(n_steps + 1)))
+
+    def events_at(self, t: int) -> np.ndarray:
+        """Flat indices of the neurons spiking at step ``t``, ascending."""
+        return self.flat[self.bounds[t]:self.bounds[t + 1]]
+
+    def all_events(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(flat, step)`` of every spike in the frame."""
+        return self.flat, self.steps
+
+
+@dataclass(frozen=True, eq=False)
+class RateTrain:
+    """Regular spike trains with the code's deterministic phase.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from compiler.snn import RateCode
+    >>> tr = RateTrain.build(RateCode(max_rate=0.5), np.array([[1.0, 0.5]]), n_steps=4)
+    >>> [tr.events_at(t).tolist() for t in range(4)]
+    [[], [0], [], [0, 1]]
+    """
+
+    code: RateCode
+    rates: np.ndarray
+    n_steps: int
+
+    @classmethod
+    def build(cls, code: RateCode, values: np.ndarray, n_steps: int) -> RateTrain:
+        """Rates of ``values`` (shape ``(frames, size)``) under ``code``."""
+        return cls(code, code.rates(values).ravel(), n_steps)
+
+    def events_at(self, t: int) -> np.ndarray:
+        """Flat indices of the neurons spiking at step ``t``, ascending."""
+        return np.flatnonzero(self.code.spikes_at(self.rates, t))
+
+    def all_events(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(flat, step)`` of every spike in the frame, ordered by step then index."""
+        chunk = max(1, _CHUNK_ELEMENTS // max(1, self.rates.size))
+        flats, steps = [], []
+        for t0 in range(0, self.n_steps, chunk):
+            t = np.arange(t0, min(t0 + chunk, self.n_steps))[:, None]
+            st, fl = np.nonzero(self.code.spikes_at(self.rates[None, :], t))
+            flats.append(fl)
+            steps.append(st + t0)
+        return np.concatenate(flats), np.concatenate(steps).astype(np.int64)
+
+
+Train = LatencyTrain | RateTrain
+
+#: Spike-train builders by code ``type``.
+TRAINS: dict[str, Callable[..., Train]] = {"latency": LatencyTrain.build, "rate": RateTrain.build}
+
+
+def value_shape(network: SpikingNetwork, port: str) -> tuple[int, ...]:
+    """The shape of one frame of input ``port``: its population's, minus a split's part axis.
+
+    Examples
+    --------
+    >>> from compiler.snn import Encoder, LatencyCode, Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="n", n_steps=4,
+    ...     populations=[Population(id="a", shape={"i": 3, "part": 2}, source=True)],
+    ...     encoders=[Encoder(port="x", population="a", split="re_im",
+    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
+    >>> value_shape(net, "x")
+    (3,)
+    """
+    enc = next(e for e in network.encoders if e.port == port)
+    dims = network.population[enc.population].dims
+    return dims[:-1] if N_PARTS[enc.split] else dims
+
+
+def encode_inputs(
+    network: SpikingNetwork,
+    inputs: Mapping[str, np.ndarray],
+    trains: Mapping[str, Callable[..., Train]] = TRAINS,
+) -> tuple[dict[str, Train], int, bool]:
+    """Check ``inputs`` and turn them into one spike train per source population.
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        A validated network.
+    inputs : mapping of port to array
+        One array per encoder port, of the port's value shape, or with one
+        leading frames axis (the same number of frames for every port).
+    trains : mapping
+        Train builder per code type (default :data:`TRAINS`).
+
+    Returns
+    -------
+    trains : dict
+        Per source population id, its train.
+    n_frames : int
+        Frames in the batch (1 without a frames axis).
+    framed : bool
+        Whether the inputs had a leading frames axis.
+
+    Raises
+    ------
+    SimulationError
+        For missing or extra ports, a wrong shape, a non-numeric or complex
+        array where the split is real, NaN/Inf, or disagreeing frame counts.
+    NetworkError
+        If two encoders feed one population.
+
+    Examples
+    --------
+    >>> from compiler.snn import Encoder, LatencyCode, Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="n", n_steps=4,
+    ...     populations=[Population(id="a", shape={"i": 2}, source=True)],
+    ...     encoders=[Encoder(port="x", population="a",
+    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
+    >>> trains, n_frames, framed = encode_inputs(net, {"x": np.array([[1.0, 0.5]] * 3)})
+    >>> n_frames, framed, [a.tolist() for a in trains["a"].all_events()]
+    (3, True, [[0, 2, 4, 1, 3, 5], [0, 0, 0, 2, 2, 2]])
+    """
+    ports = {e.port: e for e in network.encoders}
+    missing, extra = sorted(set(ports) - set(inputs)), sorted(set(inputs) - set(ports))
+    if missing or extra:
+        raise SimulationError(f"network {network.name!r}: inputs must be exactly the ports "
+                              f"{sorted(ports)}; missing {missing}, unexpected {extra}")
+    fed: dict[str, str] = {}
+    frames: dict[str, int | None] = {}
+    arrays = {}
+    for port, enc in ports.items():
+        if enc.population in fed:
+            raise NetworkError(f"encoders {fed[enc.population]!r} and {port!r} both feed "
+                               f"population {enc.population!r}; give each source one encoder",
+                               node=port)
+        fed[enc.population] = port
+        arrays[port], frames[port] = _check_array(network, port, enc.split, inputs[port])
+    counts = set(frames.values())
+    if len(counts) > 1:
+        raise SimulationError(f"network {network.name!r}: inputs disagree on the frames axis "
+                              f"(None = no frames axis): {frames}; give every port the same "
+                              "number of frames")
+    n = counts.pop() if counts else None
+    n_frames = 1 if n is None else n
+    out = {}
+    for port, enc in ports.items():
+        x = arrays[port] if n is not None else arrays[port][None]
+        parts = split_values(x, enc.split).reshape(n_frames, -1)
+        out[enc.population] = trains[enc.code.type](enc.code, parts, network.n_steps)
+    return out, n_frames, n is not None
+
+
+def _check_array(
+    network: SpikingNetwork, port: str, split: str, value: object
+) -> tuple[np.ndarray, int | None]:
+    x = np.asarray(value)
+    want = value_shape(network, port)
+    if not (np.issubdtype(x.dtype, np.number) or x.dtype == bool):
+        raise SimulationError(f"input {port!r}: expected a numeric array, got dtype {x.dtype}",
+                              node=port)
+    if np.iscomplexobj(x) and split not in ("re_im", "re_im_signed"):
+        raise SimulationError(f"input {port!r}: complex values need an encoder split 're_im' or "
+                              f"'re_im_signed', but the split is {split!r}; pass the real part "
+                              "or change the split", node=port)
+    if x.shape == want:
+        n = None
+    elif x.ndim == len(want) + 1 and x.shape[1:] == want and x.shape[0] > 0:
+        n = x.shape[0]
+    else:
+        raise SimulationError(f"input {port!r}: expected shape {want} or (n_frames, *{want}) "
+                              f"with n_frames >= 1, got {x.shape}", node=port)
+    bad = ~np.isfinite(x)
+    if bad.any():
+        raise SimulationError(f"input {port!r}: {int(bad.sum())} of {x.size} values are NaN or "
+                              "Inf; clean or clip the input first", node=port)
+    return x, n

@@ -1,0 +1,164 @@
+r"""Delivery of a :class:`~compiler.snn.MatrixProjection`: one shared matrix along named axes.
+
+Source events (flat indices into ``(n_batch, *source_shape)``) become a sparse
+one-hot matrix ``E`` of shape ``(rows hit, n_in)`` — row = batch × repetition,
+column = the flattened ``contract`` index — and the current is
+
+.. math:: I = E\,W_k \quad\text{reshaped to } (n_{batch}, \text{reps}, \text{produce})
+          \text{ and permuted into the target's axis order,}
+
+an event-driven product that reads only the weight rows of spiking inputs;
+each output sums its rows in ascending column order.  ``W`` is stored once per
+delay class (a dense projection without delays keeps its own array), never
+tiled over repetitions; repetition axes are matched by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import prod
+
+import numpy as np
+import scipy.sparse as sp
+
+from compiler.snn.network import Population
+from compiler.snn.projections import MatrixProjection
+
+__all__ = ["MatrixDelivery"]
+
+
+@dataclass(frozen=True, eq=False)
+class MatrixDelivery:
+    """The delivery plan of one :class:`~compiler.snn.MatrixProjection`.
+
+    Attributes
+    ----------
+    id, source, target : str
+        Projection and population ids.
+    delays : tuple of int
+        The delay classes, ascending.
+    weights : tuple
+        ``W_k`` per delay class, ``(n_in, n_out)``: a dense ndarray or CSR.
+    row_synapses : tuple of ndarray
+        Non-zero weights per matrix row, per delay class.
+    rep_of, col_of : ndarray
+        Per flat source neuron: its repetition index (in the target's axis
+        order) and its matrix row.
+    n_reps : int
+        Repetitions sharing the weights.
+    block_shape, to_target : tuple of int
+        ``E @ W`` reshaped to ``(batch, *block_shape)`` (repetition axes in target
+        order, then ``produce``) is permuted by ``to_target`` into target order.
+    """
+
+    id: str
+    source: str
+    target: str
+    delays: tuple[int, ...]
+    weights: tuple[np.ndarray | sp.csr_matrix, ...]
+    row_synapses: tuple[np.ndarray, ...]
+    rep_of: np.ndarray
+    col_of: np.ndarray
+    n_reps: int
+    n_in: int
+    n_out: int
+    block_shape: tuple[int, ...]
+    to_target: tuple[int, ...]
+    integer: bool
+
+    @classmethod
+    def build(
+        cls, proj: MatrixProjection, src: Population, tgt: Population, integer: bool = False
+    ) -> MatrixDelivery:
+        """Precompute the index maps and weight operands of ``proj``.
+
+        Parameters
+        ----------
+        proj : MatrixProjection
+        src, tgt : Population
+            Its source and target (already validated against it).
+        integer : bool
+            Store int64 weights (the caller checked they are whole numbers).
+
+        Returns
+        -------
+        MatrixDelivery
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import MatrixProjection, Population
+        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
+        ...                      produce=("o",), weights=np.eye(2))
+        >>> a = Population(id="a", shape={"r": 3, "i": 2}, source=True)
+        >>> b = Population(id="b", shape={"o": 2, "r": 3})
+        >>> d = MatrixDelivery.build(p, a, b)
+        >>> d.weights[0] is p.weights, d.n_reps, d.current(0, np.array([1]), 1)[0].tolist()
+        (True, 3, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+        """
+        dtype = np.int64 if integer else np.float64
+        if proj.weights is not None and proj.delays is None:
+            w = proj.weights if not integer else proj.weights.astype(np.int64)
+            classes = {0: w}
+        else:
+            classes = {d: m.astype(dtype) for d, m in proj.by_delay().items()}
+        delays = tuple(sorted(classes))
+        weights = tuple(classes[d] for d in delays)
+        row_synapses = tuple(
+            np.diff(w.indptr) if sp.issparse(w) else np.count_nonzero(w, axis=1) for w in weights
+        )
+        rep_axes = tuple(a for a in tgt.axes if a not in proj.produce)
+        grid = np.indices(src.dims).reshape(len(src.dims), -1)
+        coord = dict(zip(src.axes, grid, strict=True))
+        rep_dims = tuple(tgt.shape[a] for a in rep_axes)
+        rep_of = (np.ravel_multi_index(tuple(coord[a] for a in rep_axes), rep_dims)
+                  if rep_axes else np.zeros(src.size, np.int64))
+        col_of = np.ravel_multi_index(tuple(coord[a] for a in proj.contract),
+                                      tuple(src.shape[a] for a in proj.contract))
+        block_axes = rep_axes + proj.produce
+        return cls(
+            id=proj.id, source=proj.source, target=proj.target, delays=delays, weights=weights,
+            row_synapses=row_synapses, rep_of=rep_of.astype(np.int64),
+            col_of=col_of.astype(np.int64), n_reps=prod(rep_dims), n_in=proj.n_in,
+            n_out=proj.n_out, block_shape=rep_dims + tuple(tgt.shape[a] for a in proj.produce),
+            to_target=tuple(block_axes.index(a) for a in tgt.axes), integer=integer,
+        )
+
+    @property
+    def src_size(self) -> int:
+        """Neurons in the source population."""
+        return self.col_of.size
+
+    @property
+    def weight_nbytes(self) -> int:
+        """Bytes held by the weight operands (independent of the repetition count)."""
+        return sum(w.nbytes if not sp.issparse(w) else
+                   w.data.nbytes + w.indices.nbytes + w.indptr.nbytes for w in self.weights)
+
+    def current(
+        self, k: int, events: np.ndarray, n_batch: int, values: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The current of the events of delay class ``k``: ``(n_batch, *target_shape)``.
+
+        ``values`` (default 1 per event) scales each event, which the closed form
+        uses to weight arrivals by their remaining steps.
+        """
+        n_src = self.col_of.size
+        b, n = np.divmod(events, n_src)
+        rows = b * self.n_reps + self.rep_of[n]
+        hit, local = np.unique(rows, return_inverse=True)
+        dtype = np.int64 if self.integer else np.float64
+        data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
+        one_hot = sp.csr_matrix((data, (local.ravel(), self.col_of[n])),
+                                shape=(hit.size, self.n_in))
+        one_hot.sum_duplicates()
+        part = one_hot @ self.weights[k]
+        full = np.zeros((n_batch * self.n_reps, self.n_out), dtype)
+        full[hit] = part.toarray() if sp.issparse(part) else part
+        block = full.reshape(n_batch, *self.block_shape)
+        return block.transpose(0, *(1 + a for a in self.to_target))
+
+    def n_events(self, k: int, events: np.ndarray) -> int:
+        """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
+        n = events % self.col_of.size
+        return int(self.row_synapses[k][self.col_of[n]].sum())

@@ -1,0 +1,175 @@
+"""The simulation plan: everything about a network that does not depend on the inputs.
+
+:func:`build_plan` validates the network once, resolves every population's
+schedule into :class:`~backends.reference.neuron.StepParams`, and builds one
+delivery per projection (index maps and weight operands, see
+:mod:`backends.reference.delivery`).  Both engines read the same plan, and a
+plan can be reused across calls of :func:`~backends.reference.simulate`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from backends.reference.delivery import DELIVERY_BUILDERS, Delivery
+from backends.reference.neuron import StepParams
+from compiler.snn.network import Population, SpikingNetwork
+from compiler.snn.projections import Projection
+from ir.errors import SimulationError
+
+__all__ = ["SimPlan", "build_plan", "ARITHMETICS"]
+
+#: The supported arithmetics.
+ARITHMETICS = ("float64", "int64")
+
+
+@dataclass(frozen=True, eq=False)
+class SimPlan:
+    """A network prepared for simulation.
+
+    Attributes
+    ----------
+    network : SpikingNetwork
+        The (validated) network.
+    arithmetic : {"float64", "int64"}
+        Number type of currents and membranes.
+    order : tuple of str
+        Population ids in the per-step evaluation order (zero-delay edges forward).
+    neurons : dict
+        :class:`StepParams` of every non-source population.
+    deliveries : dict
+        One delivery per projection id.
+    incoming : dict
+        Per population, the ids of its incoming projections in declaration order.
+    history : dict
+        Per population, how many past steps of its spikes a projection reads
+        (largest outgoing delay + 1): the length of its ring buffer.
+    """
+
+    network: SpikingNetwork
+    arithmetic: str
+    order: tuple[str, ...]
+    neurons: Mapping[str, StepParams]
+    deliveries: Mapping[str, Delivery]
+    incoming: Mapping[str, tuple[str, ...]]
+    history: Mapping[str, int]
+
+    @property
+    def integer(self) -> bool:
+        """Whether the plan uses integer (fixed-point) arithmetic."""
+        return self.arithmetic == "int64"
+
+    @property
+    def populations(self) -> Mapping[str, Population]:
+        """Populations by id."""
+        return self.network.population
+
+    @property
+    def weight_nbytes(self) -> int:
+        """Bytes of all weight operands the plan holds (one copy per projection and delay)."""
+        return sum(d.weight_nbytes for d in self.deliveries.values())
+
+
+def build_plan(
+    network: SpikingNetwork,
+    arithmetic: str = "float64",
+    builders: Mapping[str, Callable[..., Delivery]] = DELIVERY_BUILDERS,
+) -> SimPlan:
+    """Validate ``network`` and precompute what simulating it needs.
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        The network to simulate.
+    arithmetic : {"float64", "int64"}
+        ``int64`` requires whole-number weights, thresholds, resets and biases
+        and decays that are multiples of ``1/4096``.
+    builders : mapping
+        Delivery builder per projection ``kind`` (default :data:`DELIVERY_BUILDERS`).
+
+    Returns
+    -------
+    SimPlan
+
+    Raises
+    ------
+    NetworkError
+        If the network does not validate.
+    SimulationError
+        For an unknown arithmetic or projection kind, or parameters that are not
+        integers under ``int64`` (naming the population or projection).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from compiler.snn import (Encoder, LatencyCode, MatrixProjection, Population,
+    ...                           SpikingNetwork)
+    >>> net = SpikingNetwork(name="n", n_steps=4,
+    ...     populations=[Population(id="a", shape={"i": 2}, source=True),
+    ...                  Population(id="b", shape={"o": 1})],
+    ...     projections=[MatrixProjection(id="w", source="a", target="b", contract=("i",),
+    ...                                   produce=("o",), weights=np.ones((2, 1)))],
+    ...     encoders=[Encoder(port="x", population="a",
+    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
+    >>> plan = build_plan(net)
+    >>> plan.order, plan.incoming["b"], plan.weight_nbytes
+    (('a', 'b'), ('w',), 16)
+    """
+    if arithmetic not in ARITHMETICS:
+        raise SimulationError(f"network {network.name!r}: arithmetic {arithmetic!r} is not one of "
+                              f"{ARITHMETICS}")
+    network.validate()
+    integer = arithmetic == "int64"
+    pops = network.population
+    for proj in network.projections:
+        if proj.kind not in builders:
+            raise SimulationError(f"projection {proj.id!r}: no delivery for kind {proj.kind!r}; "
+                                  f"known kinds: {sorted(builders)}", node=proj.id)
+    if integer:
+        _check_integer(network)
+    neurons = {p.id: StepParams.from_params(p.params, network.n_steps, integer)
+               for p in network.populations if not p.source}
+    deliveries = {q.id: builders[q.kind](q, pops[q.source], pops[q.target], integer)
+                  for q in network.projections}
+    history = {p.id: 1 for p in network.populations}
+    for d in deliveries.values():
+        history[d.source] = max(history[d.source], max(d.delays) + 1)
+    return SimPlan(
+        network=network,
+        arithmetic=arithmetic,
+        order=tuple(network.population_order()),
+        neurons=neurons,
+        deliveries=deliveries,
+        incoming={p.id: tuple(q.id for q in network.incoming(p.id)) for p in network.populations},
+        history=history,
+    )
+
+
+#: The stored weights of a projection, by ``kind`` (for the integer check).
+_WEIGHTS: dict[str, Callable[[Projection], np.ndarray]] = {
+    "matrix": lambda p: p.weights if p.weights is not None else p.values,
+    "stencil": lambda p: p.kernel,
+}
+
+
+def _check_integer(network: SpikingNetwork) -> None:
+    fix = "quantize the network first (integer weights, thresholds, biases; decays k/4096)"
+    for pop in network.populations:
+        if not pop.source and not pop.params.is_integer():
+            p = pop.params
+            raise SimulationError(
+                f"population {pop.id!r}: arithmetic='int64' needs whole-number v_th, v_reset and "
+                f"biases and decays that are multiples of 1/4096; got v_th={p.v_th}, "
+                f"v_reset={p.v_reset}, biases={[ph.bias for ph in p.phases]}, du={p.du}, "
+                f"dv={p.dv}; {fix}", node=pop.id)
+    for proj in network.projections:
+        w = np.asarray(_WEIGHTS.get(proj.kind, lambda p: np.zeros(0))(proj))
+        bad = w != np.rint(w)
+        if bad.any():
+            raise SimulationError(
+                f"projection {proj.id!r}: arithmetic='int64' needs whole-number weights; "
+                f"{int(bad.sum())} of {w.size} are not (e.g. {float(w[bad][0])}); {fix}",
+                node=proj.id)

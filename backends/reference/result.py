@@ -1,0 +1,104 @@
+"""What a simulation returns: :class:`SimResult`, and the engines' raw record :class:`Activity`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Activity", "SimResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class Activity:
+    """The raw record both engines produce (flat per-neuron arrays, frames first).
+
+    Attributes
+    ----------
+    first_spike : dict
+        Per population, ``(n_frames, size)`` int64 first spike step, ``-1`` = never.
+    counts : dict
+        Per population, ``(n_frames, size)`` int64 spikes per neuron in the frame.
+    membrane : dict
+        Per neuron population, ``(n_frames, size)`` membrane ``v`` after the last step.
+    synaptic_events : dict
+        Per projection, spikes delivered × synapses reached (over the batch).
+    rasters : dict or None
+        Per population, ``(n_frames, n_steps, size)`` bool spikes, when recorded.
+    """
+
+    first_spike: dict[str, np.ndarray]
+    counts: dict[str, np.ndarray]
+    membrane: dict[str, np.ndarray]
+    synaptic_events: dict[str, int]
+    rasters: dict[str, np.ndarray] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class SimResult:
+    """The outcome of :func:`backends.reference.simulate`.
+
+    Attributes
+    ----------
+    outputs : dict of str to ndarray
+        Decoded values per output port (after ``combine``); a leading frames
+        axis iff the inputs had one.
+    spike_counts : dict of str to int
+        Spikes per population (sources included), summed over the batch.
+    synaptic_events : dict of str to int
+        Per projection, spikes delivered within the frame × synapses each reaches
+        (the work a chip does; counted whether or not the target's input is on).
+    first_spike_steps : dict of str to ndarray
+        Per population, int ``(n_frames, *shape)`` first spike step, ``-1`` = never.
+    spikes : dict of str to ndarray or None
+        Per population, bool rasters ``(n_frames, n_steps, *shape)`` when
+        ``record_spikes=True``.
+    mode : {"step", "closed"}
+        The engine that ran (``auto`` resolved).
+    arithmetic : {"float64", "int64"}
+        The arithmetic used.
+    n_steps, n_frames : int
+        Steps per frame and frames in the batch.
+    """
+
+    outputs: dict[str, np.ndarray]
+    spike_counts: dict[str, int]
+    synaptic_events: dict[str, int]
+    first_spike_steps: dict[str, np.ndarray]
+    spikes: dict[str, np.ndarray] | None
+    mode: str
+    arithmetic: str
+    n_steps: int
+    n_frames: int
+
+    @property
+    def total_spikes(self) -> int:
+        """Spikes of every population, summed."""
+        return sum(self.spike_counts.values())
+
+    @property
+    def total_synaptic_events(self) -> int:
+        """Synaptic events of every projection, summed."""
+        return sum(self.synaptic_events.values())
+
+    def summary(self) -> str:
+        """A short human-readable report of the run.
+
+        Examples
+        --------
+        >>> r = SimResult(outputs={"y": np.zeros(2)}, spike_counts={"a": 3},
+        ...               synaptic_events={"w": 6}, first_spike_steps={}, spikes=None,
+        ...               mode="step", arithmetic="float64", n_steps=8, n_frames=1)
+        >>> print(r.summary())
+        mode=step arithmetic=float64 frames=1 steps=8 spikes=3 synaptic_events=6
+          population a: 3 spikes
+          projection w: 6 synaptic events
+          output y: shape (2,)
+        """
+        lines = [f"mode={self.mode} arithmetic={self.arithmetic} frames={self.n_frames} "
+                 f"steps={self.n_steps} spikes={self.total_spikes} "
+                 f"synaptic_events={self.total_synaptic_events}"]
+        lines += [f"  population {k}: {v} spikes" for k, v in self.spike_counts.items()]
+        lines += [f"  projection {k}: {v} synaptic events" for k, v in self.synaptic_events.items()]
+        lines += [f"  output {k}: shape {v.shape}" for k, v in self.outputs.items()]
+        return "\n".join(lines)

@@ -1,0 +1,144 @@
+"""The public entry point :func:`simulate`: check, encode, run an engine, decode."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from backends.reference.closed import closed_form_problems, run_closed
+from backends.reference.decoding import check_decoders, decode_outputs
+from backends.reference.encoding import encode_inputs
+from backends.reference.plan import SimPlan, build_plan
+from backends.reference.result import Activity, SimResult
+from backends.reference.step import run_step
+from compiler.snn.network import SpikingNetwork
+from ir.errors import SimulationError
+
+__all__ = ["simulate", "ENGINES", "RASTER_LIMIT_BYTES"]
+
+#: Default cap on recorded spike rasters (bytes).
+RASTER_LIMIT_BYTES = 256 << 20
+
+#: The engines by mode name.
+ENGINES: dict[str, Callable[..., Activity]] = {"step": run_step, "closed": run_closed}
+
+
+def simulate(
+    network: SpikingNetwork,
+    inputs: Mapping[str, np.ndarray],
+    *,
+    mode: str = "step",
+    arithmetic: str = "float64",
+    record_spikes: bool = False,
+    raster_limit_bytes: int = RASTER_LIMIT_BYTES,
+    plan: SimPlan | None = None,
+) -> SimResult:
+    """Simulate a spiking network on a batch of inputs.
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        The network (validated here).
+    inputs : mapping of port to ndarray
+        One array per encoder port, of the port's value shape (the source
+        population's shape without the ``part`` axis a split adds), or with one
+        leading frames axis ``(n_frames, *value_shape)`` on every port.
+    mode : {"step", "closed", "auto"}
+        ``step`` runs every time step; ``closed`` computes the spike steps of a
+        fire-once feed-forward network directly; ``auto`` picks ``closed`` when
+        the network is eligible.
+    arithmetic : {"float64", "int64"}
+        Number type of currents and membranes; ``int64`` is fixed-point with
+        truncating decays and needs integer parameters.
+    record_spikes : bool
+        Return full spike rasters in :attr:`SimResult.spikes`.
+    raster_limit_bytes : int
+        Refuse ``record_spikes`` when the rasters would exceed this many bytes.
+    plan : SimPlan, optional
+        A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).
+
+    Returns
+    -------
+    SimResult
+        Decoded outputs (frames axis iff the inputs had one), spike counts,
+        synaptic events, first spike steps and optional rasters.
+
+    Raises
+    ------
+    NetworkError
+        If the network does not validate, or a decoder cannot be honoured.
+    SimulationError
+        For bad inputs (ports, shapes, complex into a real split, NaN/Inf), an
+        unknown mode or arithmetic, ``mode="closed"`` on an ineligible network,
+        non-integer parameters under ``int64``, or rasters over the limit.
+
+    Notes
+    -----
+    Both engines follow :mod:`compiler.snn.neurons` to the letter.  They give
+    identical spike steps, outputs and counts in ``int64`` always, and in
+    ``float64`` whenever every membrane sum is exact (dyadic weights,
+    thresholds, biases and times, magnitudes far below ``2**45`` — quantized
+    networks); otherwise a neuron whose membrane lands within rounding of its
+    threshold may fire one step apart between the modes.
+
+    Examples
+    --------
+    Two inputs through unit weights into an IF neuron with threshold 2: the
+    latency code puts ``x = 1`` at step 0 and ``x = 0.5`` at step 2.
+
+    >>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection,
+    ...                           NeuronParams, Population, SpikingNetwork)
+    >>> net = SpikingNetwork(name="tiny", n_steps=6,
+    ...     populations=[Population(id="in", shape={"i": 2}, source=True),
+    ...                  Population(id="out", shape={"o": 1},
+    ...                             params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
+    ...     projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
+    ...                                   produce=("o",), weights=np.ones((2, 1)))],
+    ...     encoders=[Encoder(port="x", population="in",
+    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
+    ...     decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    >>> r = simulate(net, {"x": np.array([1.0, 0.5])}, mode="auto")
+    >>> r.mode, r.outputs["t"].tolist(), r.synaptic_events
+    ('closed', [2.0], {'w': 2})
+    """
+    if mode not in (*ENGINES, "auto"):
+        raise SimulationError(f"network {network.name!r}: mode {mode!r} is not one of "
+                              f"{(*ENGINES, 'auto')}")
+    if plan is None:
+        plan = build_plan(network, arithmetic)
+    elif plan.network is not network or plan.arithmetic != arithmetic:
+        raise SimulationError(f"network {network.name!r}: the plan given was built for network "
+                              f"{plan.network.name!r} with arithmetic {plan.arithmetic!r}; build "
+                              f"it with build_plan(network, {arithmetic!r})")
+    check_decoders(network)
+    problems = closed_form_problems(network) if mode != "step" else []
+    if mode == "closed" and problems:
+        raise SimulationError(f"network {network.name!r} cannot use mode='closed': "
+                              + "; ".join(problems) + "; use mode='step'")
+    run = "step" if mode == "step" or problems else "closed"
+    trains, n_frames, framed = encode_inputs(network, inputs)
+    if record_spikes:
+        need = n_frames * network.n_steps * sum(p.size for p in network.populations)
+        if need > raster_limit_bytes:
+            raise SimulationError(f"network {network.name!r}: spike rasters would take {need} "
+                                  f"bytes ({n_frames} frames x {network.n_steps} steps x "
+                                  f"{need // max(1, n_frames * network.n_steps)} neurons), over "
+                                  f"raster_limit_bytes={raster_limit_bytes}; simulate fewer "
+                                  "frames, raise the limit, or use record_spikes=False")
+    act = ENGINES[run](plan, trains, n_frames, record_spikes)
+    pops = network.population
+    return SimResult(
+        outputs=decode_outputs(network, act, framed),
+        spike_counts={pid: int(c.sum()) for pid, c in act.counts.items()},
+        synaptic_events=dict(act.synaptic_events),
+        first_spike_steps={pid: f.reshape(n_frames, *pops[pid].dims)
+                           for pid, f in act.first_spike.items()},
+        spikes=None if act.rasters is None else {
+            pid: r.reshape(n_frames, network.n_steps, *pops[pid].dims)
+            for pid, r in act.rasters.items()},
+        mode=run,
+        arithmetic=arithmetic,
+        n_steps=network.n_steps,
+        n_frames=n_frames,
+    )
