@@ -1,0 +1,195 @@
+"""The explicit state of one lowering run: graph types, options, open networks, segments.
+
+Rules ask the context for what they need instead of reaching for globals:
+
+* :meth:`LoweringContext.builder` — the network currently being built;
+* :meth:`LoweringContext.to_host` — make a value available as an array (adds a
+  decoder and closes the current spiking segment if the value lives there);
+* :meth:`LoweringContext.encode` — a source population carrying a host value
+  with a given code (adds an encoder);
+* :meth:`LoweringContext.motif_for`, :meth:`LoweringContext.option`,
+  :attr:`LoweringContext.calibration` — the choices the user and the calibrate
+  pass made.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from compiler.lowering.builder import NetworkBuilder
+from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.values import HostValue, SpikeValue, Value
+from compiler.program import Segment
+from compiler.snn import (
+    N_PARTS,
+    PART_AXIS,
+    Decoder,
+    Encoder,
+    LatencyCode,
+    Population,
+    RateCode,
+    Split,
+)
+from ir import Graph
+from ir.errors import CompileError
+from ir.types import TensorType
+
+__all__ = ["LoweringContext", "lower_graph"]
+
+
+@dataclass
+class _Open:
+    builder: NetworkBuilder
+    closed: bool = False
+
+
+@dataclass
+class LoweringContext:
+    """State shared by the lowering rules of one compilation.
+
+    Parameters
+    ----------
+    graph : ir.Graph
+        The (verified) graph being lowered.
+    registry : LoweringRegistry
+        The rules.
+    options : dict
+        Compile options (``motifs``: node id or op name → motif; ``time_steps``;
+        ``weight_bits`` …).
+    calibration : dict
+        Per-node calibration data from the calibrate pass (node id → record).
+    target : object, optional
+        The hardware profile.
+    """
+
+    graph: Graph
+    registry: LoweringRegistry
+    options: dict[str, Any] = field(default_factory=dict)
+    calibration: dict[str, Any] = field(default_factory=dict)
+    target: Any = None
+    types: dict[str, TensorType] = field(init=False)
+    values: dict[str, Value] = field(init=False, default_factory=dict)
+    _plan: list[_Open | str] = field(init=False, default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.types = self.graph.infer_types()
+
+    # ------------------------------------------------------------- choices
+    def motif_for(self, node: str) -> str:
+        """The motif chosen for ``node``: by node id, then by op name, then the default."""
+        op = self.graph.op(node)
+        motifs = self.options.get("motifs") or {}
+        motif = motifs.get(node, motifs.get(op.op, self.registry.default_motif(type(op))))
+        self.registry.rule(type(op), motif, node=node)  # raises a clear error if unknown
+        return motif
+
+    def option(self, name: str, default: Any = None) -> Any:
+        """A compile option by name."""
+        value = self.options.get(name)
+        return default if value is None else value
+
+    # ------------------------------------------------------------ networks
+    @property
+    def network_index(self) -> int:
+        """Index (among spiking segments) of the network :meth:`builder` returns."""
+        return self._current()[0]
+
+    def builder(self) -> NetworkBuilder:
+        """The open network builder (a new spiking segment after a host segment)."""
+        return self._current()[1].builder
+
+    def _current(self) -> tuple[int, _Open]:
+        opens = [p for p in self._plan if isinstance(p, _Open)]
+        if not opens or opens[-1].closed:
+            name = f"{self.graph.name}#{len(opens)}" if opens else self.graph.name
+            opens.append(_Open(NetworkBuilder(name)))
+            self._plan.append(opens[-1])
+        return len(opens) - 1, opens[-1]
+
+    def _opens(self) -> list[_Open]:
+        return [p for p in self._plan if isinstance(p, _Open)]
+
+    # ------------------------------------------------------------ boundaries
+    def to_host(self, value: Value) -> HostValue:
+        """Make ``value`` available on the host (decoding spikes at the end of their segment)."""
+        if isinstance(value, HostValue):
+            return value
+        opened = self._opens()[value.network]
+        opened.builder.decoder(value.decoder)
+        opened.closed = True
+        return HostValue(node=value.node, type=value.type)
+
+    def encode(self, value: Value, *, consumer: str, code: LatencyCode | RateCode,
+               split: Split = "none", motif: str) -> Population:
+        """A source population in the open network that carries ``value`` with ``code``.
+
+        The population has the value's axes plus a ``part`` axis if ``split``
+        adds one; its id is ``"<consumer>/in"`` and its encoder's port is the
+        value's node id.  A spike value is decoded to the host first (use its
+        spikes directly instead where the consuming motif can).
+        """
+        host = self.to_host(value)
+        if not host.type.complex and split in ("re_im", "re_im_signed"):
+            raise CompileError(f"node {consumer!r}: split {split!r} needs a complex input, but "
+                               f"{host.node!r} is real", node=consumer)
+        builder = self.builder()
+        if builder.has_encoder(host.node):
+            raise CompileError(f"node {consumer!r}: value {host.node!r} is already encoded in "
+                               "this network by another consumer; give it one motif",
+                               node=consumer)
+        shape = dict(host.type.axes)
+        if N_PARTS[split]:
+            shape[PART_AXIS] = N_PARTS[split]
+        pop = builder.population(consumer, "in", shape, motif=motif, source=True)
+        builder.encoder(Encoder(port=host.node, population=pop.id, code=code, split=split,
+                                node=host.node))
+        return pop
+
+    def spike_value(self, node: str, population: Population, decoder: Decoder,
+                    window: tuple[int, int], **code: Any) -> SpikeValue:
+        """Describe ``node``'s value as carried by ``population`` of the open network."""
+        if decoder.port != node or decoder.population != population.id:
+            decoder = decoder.model_copy(update={"port": node, "population": population.id})
+        self.builder().use_steps(window[1])
+        return SpikeValue(node=node, type=self.types[node], population=population.id,
+                          decoder=decoder, window=window, code=code,
+                          network=self.network_index)
+
+    def run_on_host(self, node: str, inputs: list[Value]) -> HostValue:
+        """Evaluate ``node`` on the host: decode its inputs, add a host segment."""
+        for v in inputs:
+            self.to_host(v)
+        for opened in self._opens():
+            opened.closed = True
+        self._plan.append(node)
+        return HostValue(node=node, type=self.types[node])
+
+    # ------------------------------------------------------------ result
+    def segments(self) -> list[Segment]:
+        """The program's segments in execution order (empty networks dropped)."""
+        out = []
+        for item in self._plan:
+            if isinstance(item, str):
+                out.append(Segment(kind="host", node=item,
+                                   inputs=list(self.graph.inputs_of(item)), outputs=[item]))
+            elif not item.builder.is_empty:
+                b = item.builder
+                out.append(Segment(kind="spiking", network=b.finish(), inputs=b.input_ports,
+                                   outputs=b.output_ports))
+        return out
+
+
+def lower_graph(ctx: LoweringContext) -> list[Segment]:
+    """Lower every node of ``ctx.graph`` in topological order; return the segments."""
+    for node in ctx.graph.topological_order():
+        op = ctx.graph.op(node)
+        inputs = [ctx.values[i] for i in ctx.graph.inputs_of(node)]
+        motif = ctx.motif_for(node)
+        rule = ctx.registry.rule(type(op), motif, node=node)
+        if rule is None:
+            ctx.values[node] = ctx.run_on_host(node, inputs)
+        else:
+            ctx.values[node] = rule(ctx, node, op, inputs)
+    return ctx.segments()
+

@@ -1,0 +1,95 @@
+"""The pass contract: a named, frozen unit that turns a valid program into a valid program.
+
+Imitating xDSL, a pass is a frozen dataclass with a class-level ``name`` (the
+kebab-case name used in options and reports), its options as fields, and one
+``apply(ctx, program)``.  The contract: given a program whose graph verifies,
+return one whose graph still verifies and whose segments are consistent.
+Passes never read globals; everything they need is in the explicit
+:class:`CompileContext`.
+
+Examples
+--------
+>>> from dataclasses import dataclass
+>>> @dataclass(frozen=True)
+... class Count(Pass):
+...     name = "count"
+...     def apply(self, ctx, program):
+...         program.records[self.name] = len(program.graph.topological_order())
+...         return program
+>>> from ir import Graph
+>>> from compiler.program import CompiledProgram
+>>> g = Graph.from_dict({"name": "x", "nodes": [
+...     {"id": "a", "op": "input", "shape": {"range": 4}},
+...     {"id": "o", "op": "output", "input": "a"}]})
+>>> records = run_pipeline([Count()], CompileContext(), CompiledProgram(graph=g)).records
+>>> records["count"], sorted(records["timings"])
+(2, ['count'])
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from compiler.program import CompiledProgram
+
+__all__ = ["Pass", "CompileContext", "run_pipeline", "Progress"]
+
+#: ``progress(pass_name, message)``: called by passes on long work.
+Progress = Callable[[str, str], None]
+
+
+def _silent(_name: str, _message: str) -> None:
+    return None
+
+
+@dataclass
+class CompileContext:
+    """Everything a pass may consult besides the program itself.
+
+    Parameters
+    ----------
+    target : object, optional
+        The hardware profile (``compiler.hardware``), None for an unbounded target.
+    options : dict
+        Compile options by name (``motifs``, ``calibration``, ``time_steps``,
+        ``weight_bits`` …); passes read the ones they know.
+    calibration_inputs : dict of str to ndarray
+        Sample inputs by input node id, for the calibrate pass.
+    lowering : object, optional
+        The lowering registry (``compiler.lowering.LoweringRegistry``) to use.
+    progress : callable
+        ``progress(pass_name, message)`` for long work (silent by default).
+    """
+
+    target: Any = None
+    options: dict[str, Any] = field(default_factory=dict)
+    calibration_inputs: Mapping[str, Any] = field(default_factory=dict)
+    lowering: Any = None
+    progress: Progress = _silent
+
+
+@dataclass(frozen=True)
+class Pass:
+    """Base class of compiler passes: subclass, set ``name``, implement :meth:`apply`."""
+
+    name: ClassVar[str] = "pass"
+
+    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        """Transform ``program``; valid program in, valid program out."""
+        raise NotImplementedError(f"pass {self.name!r} does not implement apply()")
+
+
+def run_pipeline(passes: Iterable[Pass], ctx: CompileContext,
+                 program: CompiledProgram) -> CompiledProgram:
+    """Apply ``passes`` in order, timing each (seconds stored in ``records["timings"]``)."""
+    timings = program.records.setdefault("timings", {})
+    for p in passes:
+        ctx.progress(p.name, "start")
+        start = time.perf_counter()
+        program = p.apply(ctx, program)
+        timings[p.name] = time.perf_counter() - start
+        ctx.progress(p.name, "done")
+    return program

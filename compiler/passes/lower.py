@@ -1,0 +1,45 @@
+"""The ``lower`` pass: every IR node becomes spiking motifs or a host segment."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from compiler.lowering import LoweringContext, default_registry, lower_graph
+from compiler.passes.base import CompileContext, Pass
+from compiler.program import CompiledProgram
+
+__all__ = ["Lower"]
+
+
+@dataclass(frozen=True)
+class Lower(Pass):
+    """Lower the graph with ``ctx.lowering`` (default: :func:`compiler.lowering.default_registry`).
+
+    Reads ``program.records["calibrate"]`` (per-node calibration) when present
+    and stores, under ``records["lower"]``, the motif chosen for every node.
+
+    Examples
+    --------
+    >>> from ir import Graph
+    >>> g = Graph.from_dict({"name": "x", "nodes": [
+    ...     {"id": "a", "op": "input", "shape": {"range": 4}},
+    ...     {"id": "m", "op": "magnitude", "input": "a", "kind": "l1"},
+    ...     {"id": "o", "op": "output", "input": "m"}]})
+    >>> p = Lower().apply(CompileContext(), CompiledProgram(graph=g))
+    >>> [(s.kind, s.node) for s in p.segments], p.records["lower"]["motifs"]["m"]
+    ([('host', 'm'), ('host', 'o')], 'host')
+    """
+
+    name = "lower"
+
+    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        registry = ctx.lowering or default_registry()
+        calibration = program.records.get("calibrate") or {}
+        lctx = LoweringContext(graph=program.graph, registry=registry, options=ctx.options,
+                               calibration=getattr(calibration, "nodes", calibration),
+                               target=ctx.target)
+        program.segments = lower_graph(lctx)
+        program.records[self.name] = {
+            "motifs": {n: lctx.motif_for(n) for n in program.graph.topological_order()},
+        }
+        return program
