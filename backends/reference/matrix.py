@@ -24,6 +24,9 @@ import scipy.sparse as sp
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
 
+#: Above ``n_in / 16`` events per target row the one-hot BLAS product beats gathering rows.
+_DENSE_EVENTS_PER_ROW = 16
+
 __all__ = ["MatrixDelivery"]
 
 
@@ -146,15 +149,39 @@ class MatrixDelivery:
         n_src = self.col_of.size
         b, n = np.divmod(events, n_src)
         rows = b * self.n_reps + self.rep_of[n]
-        hit, local = np.unique(rows, return_inverse=True)
         dtype = np.int64 if self.integer else np.float64
-        data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
-        one_hot = sp.csr_matrix((data, (local.ravel(), self.col_of[n])),
-                                shape=(hit.size, self.n_in))
-        one_hot.sum_duplicates()
-        part = one_hot @ self.weights[k]
+        weights = self.weights[k]
+        if sp.issparse(weights):
+            hit, local = np.unique(rows, return_inverse=True)
+            data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
+            one_hot = sp.csr_matrix((data, (local.ravel(), self.col_of[n])),
+                                    shape=(hit.size, self.n_in))
+            one_hot.sum_duplicates()
+            part = (one_hot @ weights).toarray()
+        else:
+            order = np.argsort(rows, kind="stable")
+            rows, cols = rows[order], self.col_of[n[order]]
+            starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if rows.size else rows
+            hit = rows[starts]
+            data = None if values is None else values[order].astype(dtype)
+            if events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
+                # dense enough: a one-hot block and one BLAS product
+                local = np.repeat(np.arange(hit.size), np.diff(np.r_[starts, rows.size]))
+                if self.integer:
+                    one_hot = np.zeros((hit.size, self.n_in), dtype)
+                    np.add.at(one_hot, (local, cols), 1 if data is None else data)
+                else:  # bincount adds in event order, like add.at, but much faster
+                    one_hot = np.bincount(local * self.n_in + cols, weights=data,
+                                          minlength=hit.size * self.n_in)
+                    one_hot = one_hot.reshape(hit.size, self.n_in)
+                part = one_hot @ weights
+            else:  # sparse in time: gather each event's weight row, add them per target row
+                gathered = weights[cols]
+                if data is not None:
+                    gathered = gathered * data[:, None]
+                part = np.add.reduceat(gathered, starts, axis=0) if rows.size else gathered
         full = np.zeros((n_batch * self.n_reps, self.n_out), dtype)
-        full[hit] = part.toarray() if sp.issparse(part) else part
+        full[hit] = part
         block = full.reshape(n_batch, *self.block_shape)
         return block.transpose(0, *(1 + a for a in self.to_target))
 

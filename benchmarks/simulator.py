@@ -1,0 +1,259 @@
+r"""Benchmark: the reference simulator (step and closed form) against Brian2 and numpy's FFT.
+
+The network is the time-coded S-FT (range DFT) of ``N = 256`` real samples,
+replicated over ``C`` chirps with one shared weight matrix:
+
+* source population ``adc = {chirp: C, sample: N}``, linear :class:`LatencyCode`
+  on ``[-1, 1]`` over the window ``T = 256`` steps (``t_j = rint((1 - x_j)/2 · T)``;
+  ``x = -1`` gives ``t = T``, no spike);
+* neuron population ``sft = {chirp: C, bin: N/2, part: 2}``: Re and Im of the
+  bins ``0 … N/2-1``, ramp neurons (``du = dv = 0``, ``fire_once``), phases
+  silent ``[0, T)`` (spiking off, bias 0) and charging ``[T, 2T)`` (input off,
+  bias ``b = 2 v_th / T``); ``n_steps = 2T = 512``;
+* one :class:`MatrixProjection` ``contract=("sample",)``, ``produce=("bin", "part")``
+  with ``W[j, 2k] = cos(2πkj/N)``, ``W[j, 2k+1] = -sin(2πkj/N)``, rounded to
+  multiples of ``2^-10`` so that every membrane sum is exact in float64 and
+  Brian2's summation order cannot change a spike step: 65 536 synapses stored
+  once, 65 536 · C instances;
+* a ``spike_time`` decoder: the membrane after the silent stage is
+  ``V_k = Σ_j W_kj (T - t_j)`` and the neuron fires at
+  ``t_s = T - 1 + ceil((v_th - V_k)/b)``, so ``V_k ≈ b (1.5T - 0.5 - t_s)`` and
+  the DFT estimate is ``V_k · Δx / T`` (``Δx = 2``).  ``v_th`` is the power of
+  two just above the largest ``|V_k|`` over bins ``k ≥ 1`` (bin 0 carries the
+  latency offset ``-x_min`` and saturates, as in the paper), which makes ``b``
+  dyadic.
+
+Printed: medians of ``--repeats`` runs of ``simulate(mode="step")`` and
+``mode="closed"``; Brian2 2.x (numpy target, and cython where a C compiler
+works) building and running the same network with ``dt = 1`` step; agreement
+of every neuron's spike step; time ratios, weight-storage ratio, and the
+numpy FFT's time and the S-FT's accuracy against it (the paper's RMSE protocol).
+
+Run ``python benchmarks/simulator.py [--chirps 64] [--repeats 3] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from compiler.snn import (
+    Decoder,
+    Encoder,
+    LatencyCode,
+    MatrixProjection,
+    NeuronParams,
+    Phase,
+    Population,
+    SpikingNetwork,
+)
+
+N_SAMPLES = 256
+WINDOW_STEPS = 256
+WEIGHT_LSB = 2.0**-10
+X_MIN, X_MAX = -1.0, 1.0
+
+
+def chirp_matrix(n_chirps: int, n_samples: int = N_SAMPLES, seed: int = 0) -> np.ndarray:
+    """Seeded beat signals in ``[-1, 1]``: three tones (moving slightly per chirp) plus noise."""
+    rng = np.random.default_rng(seed)
+    n = np.arange(n_samples)
+    c = np.arange(n_chirps)[:, None]
+    x = np.zeros((n_chirps, n_samples))
+    for amp, f_bin, doppler in ((0.45, 20.3, 0.11), (0.25, 57.8, -0.07), (0.12, 101.1, 0.23)):
+        x += amp * np.cos(2 * np.pi * (f_bin * n / n_samples + doppler * c) + rng.uniform(0, 6.3))
+    x += rng.normal(scale=0.02, size=x.shape)
+    return np.clip(x, X_MIN, X_MAX)
+
+
+def dft_weights(n_samples: int = N_SAMPLES) -> np.ndarray:
+    """``(N, N)`` real DFT weights, columns ``(bin, part)``, rounded to ``WEIGHT_LSB``."""
+    j = np.arange(n_samples)[:, None]
+    k = np.arange(n_samples // 2)[None, :]
+    phase = 2 * np.pi * j * k / n_samples
+    w = np.stack([np.cos(phase), -np.sin(phase)], axis=-1).reshape(n_samples, n_samples)
+    return np.round(w / WEIGHT_LSB) * WEIGHT_LSB
+
+
+def sft_network(x: np.ndarray, window_steps: int = WINDOW_STEPS) -> SpikingNetwork:
+    """The S-FT network for the chirp matrix ``x`` (``v_th`` fitted to ``x``, see module doc)."""
+    n_chirps, n_samples = x.shape
+    code = LatencyCode(t_max=window_steps, x_min=X_MIN, x_max=X_MAX)
+    w = dft_weights(n_samples)
+    steps = code.spike_steps(x)
+    drive = np.where(steps < window_steps, window_steps - steps, 0).astype(float)
+    v_peak = np.abs(drive @ w)[:, 2:].max()  # bins k >= 1
+    v_th = 2.0 ** np.ceil(np.log2(v_peak * 1.001))
+    bias = 2 * v_th / window_steps
+    params = NeuronParams(du=0.0, dv=0.0, v_th=v_th, reset="fire_once",
+                          phases=(Phase(start_step=0, bias=0.0, spiking_on=False),
+                                  Phase(start_step=window_steps, bias=bias, input_on=False)))
+    scale = bias * (X_MAX - X_MIN) / window_steps
+    t_ref = 1.5 * window_steps - 0.5
+    return SpikingNetwork(
+        name="sft256", n_steps=2 * window_steps,
+        populations=[Population(id="adc", shape={"chirp": n_chirps, "sample": n_samples},
+                                source=True),
+                     Population(id="sft", shape={"chirp": n_chirps, "bin": n_samples // 2,
+                                                 "part": 2}, params=params)],
+        projections=[MatrixProjection(id="dft", source="adc", target="sft",
+                                      contract=("sample",), produce=("bin", "part"), weights=w)],
+        encoders=[Encoder(port="x", population="adc", code=code)],
+        decoders=[Decoder(port="y", population="sft", kind="spike_time", scale=scale,
+                          t_ref=t_ref, missing=scale * (t_ref - 2 * window_steps),
+                          combine="re_im")],
+        meta={"v_th": v_th, "bias": bias})
+
+
+def median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    """Median wall time of ``repeats`` calls and the last result."""
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def paper_rmse(estimate: np.ndarray, reference: np.ndarray) -> float:
+    """RMSE after cropping bins ``1 … N/2-1`` and min-max normalising Re|Im jointly (each side)."""
+    def norm(z: np.ndarray) -> np.ndarray:
+        parts = np.concatenate([z.real, z.imag], axis=-1)
+        return (parts - parts.min()) / (parts.max() - parts.min())
+    return float(np.sqrt(np.mean((norm(estimate[:, 1:]) - norm(reference[:, 1:])) ** 2)))
+
+
+def brian2_or_none() -> Any:
+    try:
+        import brian2
+    except Exception as exc:  # ImportError, or brian2 failing on this numpy (AttributeError)
+        print(f"brian2: not available ({type(exc).__name__}: {exc}); skipping the Brian2 part. "
+              "Install it in a separate venv: pip install 'brian2==2.9.0' 'numpy>=2.0,<2.4'")
+        return None
+    return brian2
+
+
+def run_brian2(b2: Any, net: SpikingNetwork, x: np.ndarray, target: str) -> dict:
+    """Build and run the same network in Brian2; spike steps, timings and synapse bytes."""
+    b2.prefs.codegen.target = target
+    start = time.perf_counter()
+    src, neu, proj = net.population["adc"], net.population["sft"], net.projections[0]
+    params, code = neu.params, net.encoders[0].code
+    window = params.phases[1].start_step
+    steps = code.spike_steps(x).ravel()
+    fire = np.flatnonzero(steps < window)
+    gen = b2.SpikeGeneratorGroup(src.size, fire, steps[fire] * b2.ms, dt=1 * b2.ms)
+    group = b2.NeuronGroup(
+        neu.size, "u : 1\nv : 1\nfired : boolean", dt=1 * b2.ms,
+        threshold="v >= v_th and t >= t_charge and not fired", reset="fired = True",
+        namespace={"v_th": params.v_th, "t_charge": window * b2.ms,
+                   "b": params.phases[1].bias})
+    # one step of the ramp neuron, after this step's input arrived (Brian: thresholds ->
+    # synapses -> end); threshold and reset moved behind it, so spike times are ours exactly
+    group.run_regularly("u = u * int(t < t_charge)\nv = v + u + b * int(t >= t_charge)",
+                        when="end", order=0)
+    group.thresholder["spike"].when, group.thresholder["spike"].order = "end", 1
+    group.resetter["spike"].when, group.resetter["spike"].order = "end", 2
+    syn = b2.Synapses(gen, group, "w : 1 (constant)", on_pre="u_post += w", delay=0 * b2.ms,
+                      dt=1 * b2.ms)
+    n_in, n_out = proj.n_in_out
+    reps = src.size // n_in  # no sharing in Brian2: one synapse per instance
+    pre = (np.arange(reps)[:, None, None] * n_in + np.arange(n_in)[None, :, None])
+    post = (np.arange(reps)[:, None, None] * n_out + np.arange(n_out)[None, None, :])
+    pre, post = np.broadcast_arrays(pre, post)
+    syn.connect(i=pre.ravel(), j=post.ravel())
+    syn.w = np.broadcast_to(proj.weights, pre.shape).ravel()
+    monitor = b2.SpikeMonitor(group)
+    network = b2.Network(gen, group, syn, monitor)
+    built = time.perf_counter()
+    network.run(net.n_steps * b2.ms, profile=True)
+    done = time.perf_counter()
+    loop_s = sum(float(d / b2.second) for _, d in network.profiling_info)
+    first = np.full(neu.size, -1, np.int64)
+    first[np.asarray(monitor.i[:])] = np.rint(np.asarray(monitor.t[:] / b2.ms)).astype(np.int64)
+    arrays = {}
+    for var in syn.variables.values():
+        if type(var).__name__ == "DynamicArrayVariable" and var.size == len(syn):
+            value = var.get_value()
+            arrays[value.__array_interface__["data"][0]] = value.nbytes
+    return {"build_s": built - start, "run_s": done - built, "loop_s": loop_s, "first": first,
+            "n_synapses": len(syn), "synapse_bytes": sum(arrays.values())}
+
+
+def c_compiler_works(b2: Any) -> bool:
+    """Whether Brian2's cython target can compile here (tries a 1-neuron run)."""
+    try:
+        b2.prefs.codegen.target = "cython"
+        group = b2.NeuronGroup(1, "v : 1")
+        group.run_regularly("v = v + 1")
+        b2.Network(group).run(2 * b2.defaultclock.dt)
+        return True
+    except Exception as exc:  # compiler missing or broken: report and go on
+        print(f"cython target: not usable ({type(exc).__name__}: {exc})")
+        return False
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--chirps", type=int, default=64, help="chirps (repetitions), default 64")
+    parser.add_argument("--repeats", type=int, default=3, help="timed runs per engine (median)")
+    parser.add_argument("--quick", action="store_true", help="8 chirps, numpy target only")
+    args = parser.parse_args(argv)
+    chirps = 8 if args.quick else args.chirps
+    repeats = max(args.repeats, 3)
+
+    from backends.reference import build_plan, simulate
+
+    x = chirp_matrix(chirps)
+    net = sft_network(x)
+    print(f"network: {chirps} chirps x {N_SAMPLES} samples -> {net.n_neurons} neurons, "
+          f"{net.n_synapses} stored synapses ({net.n_synapse_instances()} instances), "
+          f"{net.n_steps} steps, v_th={net.meta['v_th']:g}, bias={net.meta['bias']:g}")
+    ours = {}
+    for mode in ("step", "closed"):
+        seconds, result = median_time(lambda m=mode: simulate(net, {"x": x}, mode=m), repeats)
+        ours[mode] = (seconds, result)
+        print(f"ours {mode:6s}: {seconds * 1e3:9.1f} ms (median of {repeats})")
+    first = ours["step"][1].first_spike_steps["sft"].reshape(-1)
+    same_modes = np.array_equal(first, ours["closed"][1].first_spike_steps["sft"].reshape(-1))
+    print(f"step vs closed spike steps identical: {same_modes}")
+    fft_s, ref = median_time(lambda: np.fft.rfft(x, axis=-1)[:, :N_SAMPLES // 2], 20 * repeats)
+    y = ours["step"][1].outputs["y"]
+    print(f"numpy rfft: {fft_s * 1e3:.3f} ms; closed / fft = {ours['closed'][0] / fft_s:.0f}x, "
+          f"step / fft = {ours['step'][0] / fft_s:.0f}x slower; S-FT RMSE vs FFT (paper "
+          f"protocol, bins 1..{N_SAMPLES // 2 - 1}) = {paper_rmse(y, ref):.4f}")
+    plan_bytes = build_plan(net).weight_nbytes
+    print(f"our weight storage (plan): {plan_bytes / 2**20:.2f} MiB")
+
+    b2 = brian2_or_none()
+    if b2 is None:
+        return
+    b2.BrianLogger.log_level_warn()
+    targets = ["numpy"] + ([] if args.quick else ["cython"] if c_compiler_works(b2) else [])
+    print(f"brian2 {b2.__version__} with numpy {np.__version__}; targets: {targets}")
+    for target in targets:
+        warm = run_brian2(b2, net, x, target)  # cython compiles here; numpy warms caches
+        runs = [run_brian2(b2, net, x, target) for _ in range(repeats)]
+        run_s = statistics.median(r["run_s"] for r in runs)
+        build_s = statistics.median(r["build_s"] for r in runs)
+        loop_s = statistics.median(r["loop_s"] for r in runs)
+        agree = float(np.mean(runs[-1]["first"] == first))
+        print(f"brian2 {target}: build {build_s:.2f} s, run {run_s:.2f} s of which code objects "
+              f"{loop_s:.2f} s (medians of {repeats}; "
+              f"first run {warm['build_s'] + warm['run_s']:.2f} s); {runs[-1]['n_synapses']} "
+              f"synapses (no sharing), {runs[-1]['synapse_bytes'] / 2**20:.1f} MiB synapse "
+              f"arrays = {runs[-1]['synapse_bytes'] / plan_bytes:.0f}x our weight storage")
+        print(f"  spike-step agreement with ours: {agree:.4%} of {first.size} neurons")
+        for mode in ("closed", "step"):
+            loop, run, total = (s / ours[mode][0] for s in (loop_s, run_s, run_s + build_s))
+            print(f"  ours {mode} vs brian2 {target}: {run:.1f}x faster than its run "
+                  f"({loop:.1f}x its code objects, {total:.1f}x build + run)")
+
+
+if __name__ == "__main__":
+    main()
