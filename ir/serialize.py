@@ -218,7 +218,8 @@ def graph_to_yaml(graph: Graph) -> str:
 
 
 def graph_from_yaml(source: str | Path, *, registry: OpRegistry | None = None) -> Graph:
-    """Read a chain from YAML text (a ``str``), or from the file at ``source`` (a path).
+    """Read a chain from the file at ``source`` (a path, or a one-line ``str``), or from YAML
+    text (a multi-line ``str``).
 
     Raises
     ------
@@ -305,7 +306,13 @@ def _no_constant(name: str) -> Any:
 
 
 def _read_source(source: str | Path) -> tuple[str, str]:
-    """The text and an error-message prefix (the file name for paths)."""
+    """The text and an error-message prefix (the file name for paths).
+
+    A path object is a file; a ``str`` is chain text when it spans several lines
+    or starts like a mapping (``{``), and a file name otherwise.
+    """
+    if isinstance(source, str) and "\n" not in source and not source.lstrip().startswith("{"):
+        source = Path(source)
     if isinstance(source, os.PathLike):
         try:
             return Path(source).read_text(encoding="utf-8"), f"{source}: "
@@ -319,9 +326,8 @@ def _read_source(source: str | Path) -> tuple[str, str]:
 
 
 def _as_mapping(data: object, source: str | Path) -> object:
-    """Point at the likely mistake when a file name was passed as text."""
-    if isinstance(data, str) and isinstance(source, str) and "\n" not in source:
-        raise ChainFileError(
-            f"the text {source!r} is not a chain; to read a file pass pathlib.Path({source!r})"
-        )
+    """A chain document is a mapping; say what was found instead."""
+    if not isinstance(data, dict):
+        raise ChainFileError(f"a chain must be a mapping with 'name' and 'nodes', got "
+                             f"{type(data).__name__}")
     return data

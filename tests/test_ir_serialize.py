@@ -165,8 +165,14 @@ def test_files_are_named_in_errors(tmp_path: Path) -> None:
     assert info.value.node == "w"
     with pytest.raises(ChainFileError, match=r"missing\.yaml: cannot read the chain file"):
         Graph.from_yaml(tmp_path / "missing.yaml")
-    with pytest.raises(ChainFileError, match=r"to read a file pass pathlib\.Path\('chain\.yaml'\)"):
-        Graph.from_yaml("chain.yaml")
+    with pytest.raises(ChainFileError, match=r"chain\.yaml: cannot read the chain file"):
+        Graph.from_yaml("chain.yaml")  # a one-line str is a file name
+    ok = tmp_path / "ok.yaml"
+    ok.write_text("name: ok\nnodes:\n  - {id: a, op: input, shape: {r: 2}}\n"
+                  "  - {id: o, op: output, input: a}\n")
+    assert Graph.from_yaml(str(ok)).name == "ok"
+    with pytest.raises(ChainFileError, match="must be a mapping"):
+        Graph.from_yaml("- just\n- a list\n")
     with pytest.raises(ChainFileError, match="expected chain text"):
         Graph.from_yaml(b"nodes: []")  # type: ignore[arg-type]
     good = tmp_path / "good.json"
