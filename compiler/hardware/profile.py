@@ -1,0 +1,176 @@
+"""Hardware profiles: the budgets of a neuromorphic chip as data (built-in YAML or a user file).
+
+A :class:`HardwareProfile` lists what one core can hold and how many cores
+there are.  The passes ``quantize``, ``split`` and ``place`` read nothing else
+about the target, so a new chip is a new YAML file, never new code.  Budgets
+given as ``null`` are unbounded.
+
+Examples
+--------
+>>> p = load_profile("loihi")
+>>> p.neurons_per_core, p.n_cores, p.max_delay_steps
+(1024, 128, 63)
+>>> load_profile("unbounded").neurons_per_core is None
+True
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from ir.errors import CompileError
+
+__all__ = ["BUDGETS", "BUILTIN_PROFILES", "HardwareProfile", "load_profile"]
+
+#: The per-core budgets, in the column order of every demand array.
+BUDGETS: tuple[str, ...] = ("neurons", "input_axons", "output_axons", "synapse_bits")
+
+#: Names of the profiles shipped in ``compiler/hardware/profiles/*.yaml``.
+BUILTIN_PROFILES: tuple[str, ...] = ("loihi", "loihi2", "spinnaker2", "unbounded")
+
+_Count = int | None
+
+
+class HardwareProfile(BaseModel):
+    """The budgets of one neuromorphic target (``None`` = unbounded).
+
+    Parameters
+    ----------
+    name : str
+        Profile name.
+    cores_per_chip, chips : int or None
+        Cores on one chip and chips available.
+    neurons_per_core : int or None
+        Neurons (compartments) one core holds.
+    input_axons_per_core, output_axons_per_core : int or None
+        Fan-in lines (distinct source neurons reaching the core) and fan-out lines
+        (one per neuron and target population it drives) per core.
+    synapse_memory_bits_per_core : int or None
+        Synaptic memory of one core, bits.
+    bits_per_synapse : int
+        Bits of one stored synapse entry (weight + delay + index).
+    weight_bits, threshold_bits : int or None
+        Signed integer width of weights and of thresholds/biases/membranes
+        (``None``: floating point, no quantization).
+    delay_bits : int or None
+        Width of a synaptic delay; the largest delay is ``2**delay_bits - 1`` steps.
+    max_steps_per_frame : int or None
+        Time steps one frame may use.
+    time_step_s : float or None
+        Wall-clock duration of one time step, s (for the latency estimate).
+    shared_weights_per_core : bool
+        Whether a core stores a shared matrix or stencil kernel once for all the
+        neurons it holds, instead of once per neuron/repetition.
+    description : str
+        Where the figures come from.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    name: str = Field(min_length=1)
+    cores_per_chip: _Count = Field(default=None, ge=1)
+    chips: _Count = Field(default=None, ge=1)
+    neurons_per_core: _Count = Field(default=None, ge=1)
+    input_axons_per_core: _Count = Field(default=None, ge=1)
+    output_axons_per_core: _Count = Field(default=None, ge=1)
+    synapse_memory_bits_per_core: _Count = Field(default=None, ge=1)
+    bits_per_synapse: int = Field(default=64, ge=1)
+    weight_bits: _Count = Field(default=None, ge=2, le=64)
+    threshold_bits: _Count = Field(default=None, ge=2, le=64)
+    delay_bits: _Count = Field(default=None, ge=0, le=32)
+    max_steps_per_frame: _Count = Field(default=None, ge=1)
+    time_step_s: float | None = Field(default=None, gt=0)
+    shared_weights_per_core: bool = False
+    description: str = ""
+
+    @property
+    def n_cores(self) -> int | None:
+        """Cores available, ``cores_per_chip * chips`` (``None`` if either is unbounded)."""
+        if self.cores_per_chip is None or self.chips is None:
+            return None
+        return self.cores_per_chip * self.chips
+
+    @property
+    def max_delay_steps(self) -> int | None:
+        """Largest synaptic delay, ``2**delay_bits - 1`` steps (``None``: unbounded)."""
+        return None if self.delay_bits is None else (1 << self.delay_bits) - 1
+
+    def limits(self) -> np.ndarray:
+        """Per-core limits in :data:`BUDGETS` order as floats (``inf`` = unbounded).
+
+        Examples
+        --------
+        >>> load_profile("loihi").limits().tolist()
+        [1024.0, 4096.0, 4096.0, 1048576.0]
+        """
+        values = (self.neurons_per_core, self.input_axons_per_core,
+                  self.output_axons_per_core, self.synapse_memory_bits_per_core)
+        return np.array([np.inf if v is None else float(v) for v in values])
+
+
+def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile:
+    """A built-in profile by name, a profile from a YAML file, or ``unbounded`` for ``None``.
+
+    Parameters
+    ----------
+    target : str, Path, HardwareProfile or None
+        A name in :data:`BUILTIN_PROFILES`, or a path to a YAML file (a ``str``
+        ending in ``.yaml``/``.yml`` counts as a path).
+
+    Returns
+    -------
+    HardwareProfile
+
+    Raises
+    ------
+    CompileError
+        Unknown name, unreadable file, or a field out of range (naming the file and field).
+
+    Examples
+    --------
+    >>> load_profile("spinnaker2").cores_per_chip
+    152
+    >>> load_profile("tpu")
+    Traceback (most recent call last):
+    ...
+    ir.errors.CompileError: unknown hardware profile 'tpu'; built-in profiles are loihi, \
+loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
+    """
+    if isinstance(target, HardwareProfile):
+        return target
+    if target is None:
+        target = "unbounded"
+    if isinstance(target, str) and target in BUILTIN_PROFILES:
+        text = resources.files("compiler.hardware").joinpath(f"profiles/{target}.yaml")
+        return _from_text(text.read_text(encoding="utf-8"), f"built-in profile {target!r}")
+    path = Path(target)
+    if not (isinstance(target, Path) or path.suffix in (".yaml", ".yml")):
+        raise CompileError(f"unknown hardware profile {target!r}; built-in profiles are "
+                           f"{', '.join(BUILTIN_PROFILES)}, or give a path to a YAML profile file")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise CompileError(f"hardware profile file {str(path)!r} cannot be read: {err}") from err
+    return _from_text(text, f"hardware profile file {str(path)!r}")
+
+
+def _from_text(text: str, label: str) -> HardwareProfile:
+    try:
+        data: Any = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise CompileError(f"{label}: not valid YAML: {err}") from err
+    if not isinstance(data, dict):
+        raise CompileError(f"{label}: expected a mapping of profile fields, got "
+                           f"{type(data).__name__}")
+    try:
+        return HardwareProfile(**data)
+    except ValidationError as err:
+        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {e.get('input')!r}: {e['msg']}"
+                 for e in err.errors(include_url=False)]
+        raise CompileError(f"{label}: " + "; ".join(parts)) from err

@@ -1,0 +1,298 @@
+r"""The ``place`` pass: put the split blocks onto cores and chips, and count spike traffic.
+
+The placer is a replaceable function ``placer(demand, limits, affinity, n_cores) ->
+core`` (see :data:`Placer`); the default :func:`greedy_placer` is first-fit
+decreasing with locality.  A core holding several blocks is charged the **sum**
+of their demands (conservative: a source reaching two blocks on one core is
+counted twice, and shared weights once per block).
+
+Traffic per frame, with :math:`\hat s_S` spikes per neuron of population ``S``
+(an analytic bound, or measured from a simulation):
+
+.. math:: \text{messages} = \sum_{(c, j)} \hat s_{S(j)}\,[\text{core}(j) \ne c]
+
+over the distinct pairs (destination core ``c``, source neuron ``j`` with a
+synapse onto ``c``): one message per spike and destination core.  Messages from
+spike sources (encoders) are the host input; the others are inter-core, of
+which those crossing chips (``core // cores_per_chip``) are inter-chip.
+
+Examples
+--------
+>>> import numpy as np
+>>> greedy_placer(np.array([[3.0], [2.0], [2.0]]), np.array([4.0]),
+...               np.zeros((3, 3)), None).tolist()
+[0, 1, 1]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from compiler.hardware import BUDGETS, HardwareProfile, load_profile
+from compiler.hardware.activity import measured_spikes, spike_bound
+from compiler.passes.base import CompileContext, Pass
+from compiler.passes.split import SplitRecord, describe, split
+from compiler.program import CompiledProgram
+from compiler.snn import SpikingNetwork
+from ir.errors import BudgetError
+
+__all__ = ["Place", "Placement", "Placer", "greedy_placer", "place"]
+
+#: ``placer(demand (n, 4), limits (4,), affinity (n, n), n_cores or None) -> core (n,)``,
+#: core ``-1`` for a block that does not fit in ``n_cores``.
+Placer = Callable[[np.ndarray, np.ndarray, object, int | None], np.ndarray]
+
+
+def greedy_placer(demand: np.ndarray, limits: np.ndarray, affinity,
+                  n_cores: int | None) -> np.ndarray:
+    """First-fit decreasing with locality.
+
+    Blocks are taken in order of decreasing dominant share ``max(demand / limits)``
+    rounded to 5 % buckets, and within a bucket in Cuthill-McKee order of
+    the affinity graph (connected blocks next to each other).  Each goes to the
+    first core with room among, first, the cores of the blocks it exchanges most
+    synapses with (``affinity``, heaviest first), then all open cores in order;
+    else a new core is opened.  Deterministic.
+
+    Parameters
+    ----------
+    demand : ndarray, shape (n, 4)
+        Per block amounts in :data:`~compiler.hardware.BUDGETS` order.
+    limits : ndarray, shape (4,)
+        Per core limits (``inf`` = unbounded).
+    affinity : sparse or dense (n, n)
+        Symmetric weights between blocks (distinct source-target neuron pairs).
+    n_cores : int or None
+        Cores available (``None``: unbounded).
+
+    Returns
+    -------
+    ndarray of int
+        The core of each block; ``-1`` where none was left.
+    """
+    n = len(demand)
+    share = np.where(np.isfinite(limits), demand / np.where(np.isfinite(limits), limits, 1), 0)
+    aff = sp.csr_matrix(affinity)
+    rank = np.empty(n, np.int64)
+    rank[reverse_cuthill_mckee(aff, symmetric_mode=True)[::-1]] = np.arange(n)  # Cuthill-McKee
+    bucket = np.round(share.max(axis=1, initial=0.0) * 20)
+    order = np.lexsort((rank, -bucket))
+    core = np.full(n, -1, np.int64)
+    free = np.empty((0, demand.shape[1]))
+    for b in order:
+        d = demand[b]
+        lo, hi = aff.indptr[b], aff.indptr[b + 1]
+        nbr, w = aff.indices[lo:hi], aff.data[lo:hi]
+        placed = nbr[core[nbr] >= 0]
+        cand = core[placed[np.argsort(-w[core[nbr] >= 0], kind="stable")]]
+        fits_all = np.all(free >= d, axis=1)
+        pick = next((c for c in cand if fits_all[c]), None)
+        if pick is None and fits_all.any():
+            pick = int(np.argmax(fits_all))
+        if pick is None:
+            if n_cores is not None and len(free) >= n_cores:
+                continue
+            free = np.vstack([free, limits])
+            pick = len(free) - 1
+        free[pick] -= d
+        core[b] = pick
+    return core
+
+
+@dataclass
+class Placement:
+    """Where every block went, per-core usage and spike traffic.
+
+    Attributes
+    ----------
+    items : list of (int, str, int)
+        ``(network index, population id, block index)`` of each block.
+    core : ndarray of int
+        Core of each item; ``chip = core // cores_per_chip``.
+    usage : ndarray, shape (n_cores_used, 4)
+        Summed demand per core (:data:`~compiler.hardware.BUDGETS` order).
+    utilisation : ndarray, shape (n_cores_used, 4)
+        ``usage / limits`` (0 for unbounded budgets).
+    traffic : dict
+        Messages per frame: ``host_input``, ``inter_core``, ``inter_chip``, ``basis``
+        (``"bound"`` or ``"measured"``) and ``not_counted`` (populations whose fan-in was
+        too large to enumerate without a fan-in budget; their incoming traffic is missing).
+    """
+
+    profile: str
+    items: list[tuple[int, str, int]]
+    core: np.ndarray
+    chip: np.ndarray
+    usage: np.ndarray
+    utilisation: np.ndarray
+    traffic: dict = field(default_factory=dict)
+
+    @property
+    def n_cores(self) -> int:
+        """Cores used."""
+        return len(self.usage)
+
+    @property
+    def n_chips(self) -> int:
+        """Chips used."""
+        return int(self.chip.max()) + 1 if self.chip.size else 0
+
+    def cores_of(self, network: int, population: str) -> list[int]:
+        """Distinct cores holding blocks of one population."""
+        return sorted({int(c) for (i, p, _), c in zip(self.items, self.core, strict=True)
+                       if i == network and p == population})
+
+    def to_dict(self) -> dict:
+        """A JSON-able summary."""
+        return {"profile": self.profile, "cores": self.n_cores, "chips": self.n_chips,
+                "max_utilisation": dict(zip(BUDGETS, self.utilisation.max(axis=0, initial=0)
+                                            .round(4).tolist(), strict=True)),
+                "traffic": self.traffic}
+
+
+def _affinity(splits, offsets) -> sp.csr_matrix:
+    rows, cols = [], []
+    for k, rec in enumerate(splits):
+        for tgt, dem in rec.demand.items():
+            for src, (blk, neuron) in dem.reach.items():
+                if src not in rec.demand:
+                    continue
+                rows.append(offsets[k][tgt] + blk)
+                cols.append(offsets[k][src] + rec.demand[src].blocks.block_of(neuron))
+    n = max((o[p] + d.blocks.n_blocks for o, r in zip(offsets, splits, strict=True)
+             for p, d in r.demand.items()), default=0)
+    if not rows:
+        return sp.csr_matrix((n, n))
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    m = sp.coo_matrix((np.ones(r.size), (r, c)), shape=(n, n)).tocsr()
+    m = m + m.T
+    m.setdiag(0)
+    m.eliminate_zeros()
+    return m
+
+
+def _traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
+    host = inter = chip_x = 0.0
+    for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
+        pops = net.population
+        for tgt, dem in rec.demand.items():
+            for src, (blk, neuron) in dem.reach.items():
+                dst = core[offsets[k][tgt] + blk]
+                keys = np.unique(dst * pops[src].size + neuron)
+                dst, neuron = keys // pops[src].size, keys % pops[src].size
+                rate = spikes[k].get(src, 0.0)
+                if src not in rec.demand:
+                    host += rate * dst.size
+                    continue
+                home = core[offsets[k][src] + rec.demand[src].blocks.block_of(neuron)]
+                away = home != dst
+                inter += rate * int(away.sum())
+                if cores_per_chip:
+                    chip_x += rate * int((away & (home // cores_per_chip
+                                                  != dst // cores_per_chip)).sum())
+    missing = sorted({f"{networks[k].name}/{pid}" for k, rec in enumerate(splits)
+                      for pid, dem in rec.demand.items()
+                      if networks[k].incoming(pid) and not dem.reach})
+    return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
+            "not_counted": missing}
+
+
+def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
+          profile: HardwareProfile | None = None, *, placer: Placer = greedy_placer,
+          sim_results: Sequence | None = None) -> Placement:
+    """Place the blocks of all ``networks`` (resident together) onto the profile's cores.
+
+    Parameters
+    ----------
+    networks : sequence of SpikingNetwork
+        The program's networks.
+    splits : sequence of SplitRecord, optional
+        Their splits (computed here when omitted).
+    profile : HardwareProfile, optional
+        The target (``None``: ``unbounded``).
+    placer : Placer
+        The placement function (default :func:`greedy_placer`).
+    sim_results : sequence of SimResult, optional
+        One per network: traffic from measured spike counts instead of the bound.
+
+    Returns
+    -------
+    Placement
+
+    Raises
+    ------
+    BudgetError
+        If the blocks do not fit on ``cores_per_chip * chips`` cores.
+
+    Examples
+    --------
+    >>> from compiler.snn import Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="p", n_steps=1,
+    ...                      populations=[Population(id="y", shape={"o": 2500})])
+    >>> pl = place([net], profile=load_profile("loihi"))
+    >>> pl.n_cores, pl.usage[:, 0].tolist()
+    (3, [833.0, 833.0, 834.0])
+    """
+    profile = load_profile(profile)
+    networks = list(networks)
+    splits = list(splits) if splits is not None else [split(n, profile) for n in networks]
+    items, offsets, demand = [], [], []
+    for k, rec in enumerate(splits):
+        off = {}
+        for pid, dem in rec.demand.items():
+            off[pid] = len(items)
+            items += [(k, pid, b) for b in range(dem.blocks.n_blocks)]
+            demand.append(dem.amounts)
+        offsets.append(off)
+    demand_arr = np.concatenate(demand).astype(np.float64) if demand else np.zeros((0, 4))
+    limits = profile.limits()
+    core = np.asarray(placer(demand_arr, limits, _affinity(splits, offsets),
+                             profile.n_cores), dtype=np.int64)
+    if (core < 0).any():
+        k, pid, _ = items[int(np.argmax(core < 0))]
+        pop = networks[k].population[pid]
+        raise BudgetError(
+            f"{describe(pop)}: the {len(items):,} blocks of the program do not fit on "
+            f"{profile.n_cores} cores of {profile.name} ({profile.chips} chip(s) of "
+            f"{profile.cores_per_chip}); {int((core < 0).sum()):,} blocks were left over; use "
+            "more chips (a profile file with a larger 'chips') or shrink the network",
+            node=pop.origin.get("node", pid))
+    n_used = int(core.max()) + 1 if core.size else 0
+    usage = np.zeros((n_used, 4))
+    np.add.at(usage, core, demand_arr)
+    util = np.where(np.isfinite(limits), usage / np.where(np.isfinite(limits), limits, 1), 0.0)
+    spikes = ([measured_spikes(n, s) for n, s in zip(networks, sim_results, strict=True)]
+              if sim_results is not None else [spike_bound(n) for n in networks])
+    cpc = profile.cores_per_chip
+    traffic = _traffic(networks, splits, offsets, core, cpc, spikes)
+    traffic["basis"] = "measured" if sim_results is not None else "bound"
+    chip = core // cpc if cpc else np.zeros_like(core)
+    return Placement(profile=profile.name, items=items, core=core, chip=chip, usage=usage,
+                     utilisation=util, traffic=traffic)
+
+
+@dataclass(frozen=True)
+class Place(Pass):
+    """Place the program's networks (after ``split``); record ``records["placement"]``.
+
+    Attributes
+    ----------
+    placer : Placer
+        The placement function.
+    """
+
+    name: ClassVar[str] = "place"
+    placer: Placer = greedy_placer
+
+    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        profile = load_profile(ctx.target)
+        splits = program.records.get("split")
+        program.records["placement"] = place(program.networks, splits, profile,
+                                             placer=self.placer)
+        return program

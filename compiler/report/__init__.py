@@ -1,0 +1,111 @@
+"""The resource report of a compiled program: stages, frame I/O, CFAR op counts, cores.
+
+:func:`build_report` gathers :mod:`~compiler.report.stages` (Table 3 bottom),
+:mod:`~compiler.report.frame_io` (Table 3 top), :mod:`~compiler.report.opcounts`
+(Table 1), latency and the placement into a :class:`~compiler.report.render.Report`
+(``to_json``, ``to_markdown``, ``save_core_map``).  See ``docs/report.md``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from compiler.hardware import BUDGETS, load_profile
+from compiler.report.frame_io import frame_io
+from compiler.report.opcounts import graph_cfar_op_counts
+from compiler.report.render import Report
+from compiler.report.stages import stage_rows
+
+__all__ = ["Report", "build_report"]
+
+SCHEMA = "radarsnn-report/1"
+
+
+def build_report(program, *, sim_results: Sequence | None = None,
+                 frame_rate_hz: float | None = None, real_bits: int = 16,
+                 n_angle_bins: int | None = 256) -> Report:
+    """The resource report of ``program`` (a :class:`~compiler.program.CompiledProgram`).
+
+    Parameters
+    ----------
+    program : CompiledProgram
+        Uses ``graph``, ``networks``, ``target`` and the ``split`` / ``placement``
+        records when present (the passes ``split`` and ``place`` produce them).
+    sim_results : sequence of SimResult, optional
+        One per network, for measured spikes and synaptic events.
+    frame_rate_hz : float, optional
+        Frames per second (default ``program.options["frame_rate_hz"]`` or 10).
+    real_bits : int
+        Bits per real value of the frame I/O (complex: twice).
+    n_angle_bins : int, optional
+        Angle bins of the RA map when the chain computes none (CARRADA: 256).
+
+    Returns
+    -------
+    Report
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from compiler.program import CompiledProgram
+    >>> from ir import Graph
+    >>> g = Graph.from_yaml(Path("examples/chains/carrada_rd_oscfar.yaml"))
+    >>> rep = build_report(CompiledProgram(graph=g))
+    >>> [(r["name"], round(r["memory_kB"], 1)) for r in rep.data["frame_io"]]
+    [('raw_cube', 262.1), ('rd_map', 32.8), ('ra_map', 131.1)]
+    """
+    profile = load_profile(program.target)
+    rate = frame_rate_hz or float(program.options.get("frame_rate_hz", 10.0))
+    networks = program.networks
+    splits = program.records.get("split") or [None] * len(networks)
+    placement = program.records.get("placement")
+    sims = list(sim_results) if sim_results is not None else [None] * len(networks)
+    stages = []
+    for k, (net, sp, sim) in enumerate(zip(networks, splits, sims, strict=True)):
+        stages += stage_rows(net, split=sp, placement=placement, net_index=k,
+                             bits_per_synapse=profile.bits_per_synapse, sim=sim)
+    steps = {}
+    for net in networks:
+        for p in net.populations:
+            if "node" in p.origin:
+                steps[p.origin["node"]] = net.n_steps
+    lat_rows = [{"network": n.name, "time_steps": n.n_steps, "step_s": profile.time_step_s,
+                 "latency_s": n.n_steps * profile.time_step_s if profile.time_step_s else None}
+                for n in networks]
+    total_s = (sum(r["latency_s"] for r in lat_rows) if profile.time_step_s else None)
+    cores = []
+    if placement is not None:
+        stage_of = {(k, p.id): p.origin.get("node", p.id)
+                    for k, n in enumerate(networks) for p in n.populations}
+        first = {}
+        for (k, pid, _), c in zip(placement.items, placement.core, strict=True):
+            first.setdefault(int(c), stage_of[(k, pid)])
+        for c in range(placement.n_cores):
+            cores.append({"core": c, "chip": int(c // profile.cores_per_chip)
+                          if profile.cores_per_chip else 0, "stage": first.get(c, "?"),
+                          **dict(zip(BUDGETS, placement.usage[c].tolist(), strict=True)),
+                          "utilisation": placement.utilisation[c].round(6).tolist()})
+    totals = {
+        "inputs": sum(r["inputs_total"] for r in stages),
+        "neurons": sum(r["neurons_total"] for r in stages),
+        "synapses": sum(r["synapses_total"] for r in stages),
+        "synapses_stored": sum(r["synapses_stored"] for r in stages),
+        "cores": placement.n_cores if placement is not None else None,
+        "chips": placement.n_chips if placement is not None else None,
+        "synapse_memory_bits": sum(r.get("synapse_memory_bits", 0) for r in stages)
+        if splits[0:1] != [None] else None,
+    }
+    data = {
+        "schema": SCHEMA, "chain": program.graph.name, "target": profile.name,
+        "frame_rate_hz": rate, "budgets": list(BUDGETS),
+        "cores_per_chip": profile.cores_per_chip, "stages": stages,
+        "frame_io": frame_io(program.graph, frame_rate_hz=rate, real_bits=real_bits,
+                             n_angle_bins=n_angle_bins),
+        "cfar_ops": graph_cfar_op_counts(program.graph, steps),
+        "latency": {"networks": lat_rows, "total_s": total_s, "frame_period_s": 1.0 / rate,
+                    "fits": None if total_s is None else total_s <= 1.0 / rate},
+        "cores": cores,
+        "traffic": dict(placement.traffic) if placement is not None else {},
+        "totals": totals,
+    }
+    return Report(data)

@@ -1,0 +1,131 @@
+"""The :class:`Report`: a JSON-able dict with Markdown and core-map renderings.
+
+JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
+
+    chain, target, frame_rate_hz
+    stages[]      node, motif, network, inputs, neurons, synapses, time_steps, repetitions,
+                  cores, blocks, synapse_memory_bits, *_total, spikes_bound, ...
+    frame_io[]    name, source, shape, values, bits_per_value, bytes, memory_kB, bandwidth_Mbit_s
+    cfar_ops[]    node, n_train, algorithm, add, cmp, total[, n_steps]
+    latency       per network steps, step_s, latency_s; total_s, frame_period_s, fits
+    cores[]       core, chip, neurons, input_axons, output_axons, synapse_bits, utilisation
+    traffic       host_input, inter_core, inter_chip (messages per frame), basis
+    totals        inputs, neurons, synapses, synapses_stored, cores, chips, synapse_memory_bits
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["Report"]
+
+_STAGE_COLUMNS = ("node", "motif", "inputs", "neurons", "synapses", "time_steps", "repetitions",
+                  "cores", "synapse_memory_bits", "spikes_bound", "synaptic_events_bound")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int | np.integer):
+        return f"{int(v):,}".replace(",", " ")
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e15:
+        return _fmt(int(v))
+    if isinstance(v, float):
+        return f"{v:,.4g}".replace(",", " ") if abs(v) < 1e6 else f"{v:.3e}"
+    return str(v)
+
+
+def _table(rows: list[dict], cols: tuple[str, ...]) -> list[str]:
+    cols = tuple(c for c in cols if any(c in r for r in rows))
+    out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    out += ["| " + " | ".join(_fmt(r.get(c)) for c in cols) + " |" for r in rows]
+    return out
+
+
+@dataclass
+class Report:
+    """A resource report; ``data`` follows the schema in the module docstring."""
+
+    data: dict
+
+    def to_json(self, indent: int = 2) -> str:
+        """The report as JSON text."""
+        return json.dumps(self.data, indent=indent, default=_json_default)
+
+    def to_markdown(self) -> str:
+        """The report as Markdown tables."""
+        d = self.data
+        lines = [f"# Resource report: {d['chain']} on {d['target']}", ""]
+        lines += ["## Stages (per repetition)", ""]
+        lines += _table(d["stages"], _STAGE_COLUMNS + ("spikes_measured",
+                                                       "synaptic_events_measured"))
+        lines += ["", f"## Frame I/O at {d['frame_rate_hz']:g} frames/s", ""]
+        lines += _table(d["frame_io"], ("name", "source", "shape", "bits_per_value",
+                                        "memory_kB", "bandwidth_Mbit_s"))
+        if d["cfar_ops"]:
+            lines += ["", "## Operations per cell under test (Table 1)", ""]
+            lines += _table(d["cfar_ops"], ("node", "algorithm", "add", "cmp", "total"))
+        lat = d["latency"]
+        lines += ["", "## Latency", ""]
+        lines += _table(lat["networks"], ("network", "time_steps", "step_s", "latency_s"))
+        lines += ["", f"Total {_fmt(lat['total_s'])} s per frame against a frame period of "
+                  f"{_fmt(lat['frame_period_s'])} s: fits = {_fmt(lat['fits'])}."]
+        lines += ["", "## Totals", ""]
+        lines += _table([d["totals"]], tuple(d["totals"]))
+        lines += ["", f"## Spike traffic per frame ({d['traffic'].get('basis', '')})", ""]
+        lines += _table([d["traffic"]], ("host_input", "inter_core", "inter_chip"))
+        if d["cores"]:
+            util = np.array([c["utilisation"] for c in d["cores"]])
+            lines += ["", f"## Cores: {len(d['cores'])} used", "",
+                      "Utilisation (mean / max) per budget: " + ", ".join(
+                          f"{k} {m:.1%} / {x:.1%}" for k, m, x in
+                          zip(d["budgets"], util.mean(axis=0), util.max(axis=0), strict=True))]
+        return "\n".join(lines) + "\n"
+
+    def save_core_map(self, path: str | Path) -> Path:
+        """Draw the cores (rows of chips) coloured by stage, shaded by utilisation, as a PNG."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        cores = self.data["cores"]
+        per_row = max(1, min(32, self.data.get("cores_per_chip") or 32))
+        n_rows = max(1, -(-len(cores) // per_row))
+        stages = sorted({c["stage"] for c in cores})
+        cmap = plt.get_cmap("tab20")
+        fig, ax = plt.subplots(figsize=(max(4, per_row * 0.3), max(2, n_rows * 0.3 + 1)))
+        for c in cores:
+            i = c["core"]
+            colour = cmap(stages.index(c["stage"]) % 20)
+            ax.add_patch(plt.Rectangle((i % per_row, -(i // per_row)), 0.9, 0.9, color=colour,
+                                       alpha=0.25 + 0.75 * min(1.0, max(c["utilisation"]))))
+        for k, s in enumerate(stages):
+            ax.plot([], [], "s", color=cmap(k % 20), label=s)
+        ax.set_xlim(0, per_row)
+        ax.set_ylim(-n_rows + 1, 1)
+        ax.set_aspect("equal")
+        ax.axis("off")
+        ax.set_title(f"{self.data['chain']} on {self.data['target']}: {len(cores)} cores")
+        if stages:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
+        path = Path(path)
+        fig.savefig(path, dpi=100, bbox_inches="tight")
+        plt.close(fig)
+        return path
+
+
+def _json_default(o):
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON-serialisable: {type(o).__name__}")

@@ -1,0 +1,147 @@
+r"""Per-stage rows (the bottom of the seed's Table 3): one row per IR node of a network.
+
+A **stage** is the set of populations whose ``origin["node"]`` is one IR node
+(populations without an origin form a stage of their own id).  Its
+
+* ``repetitions`` :math:`R` is the gcd of its projections' repetition counts
+  (a matrix shared over repetition axes counts ``source.size / n_in``; a stencil 1);
+* ``inputs`` are the distinct neurons outside the stage with a synapse into it,
+  ``neurons`` its non-source neurons, ``synapses`` its projections' instances
+  (matrix: repetitions × stored synapses; stencil: neurons × taps, as
+  :meth:`~compiler.snn.SpikingNetwork.n_synapse_instances` counts) — each **per
+  repetition**, i.e. divided by :math:`R`, with the ``*_total`` fields undivided;
+* ``synapse_memory_bits`` what the split stores for it on the target, ``cores``
+  the cores its blocks occupy;
+* ``spikes`` / ``synaptic_events`` per frame: the bound of
+  :func:`compiler.hardware.activity.spike_bound` times the population sizes /
+  synapse instances, and the measured means when a simulation is given.
+"""
+
+from __future__ import annotations
+
+from math import gcd, prod
+
+import numpy as np
+
+from compiler.hardware.activity import spike_bound
+from compiler.hardware.demand import has_synapse_out, projection_info
+from compiler.snn import MatrixProjection, SpikingNetwork
+
+__all__ = ["stage_rows", "nominal_synapses", "repetitions"]
+
+
+def nominal_synapses(proj, pops) -> int:
+    """Synapse instances as the paper counts them (stencil: neurons × taps, edges ignored)."""
+    if isinstance(proj, MatrixProjection):
+        return repetitions(proj, pops) * proj.n_synapses
+    return pops[proj.target].size * proj.n_taps
+
+
+def repetitions(proj, pops) -> int:
+    """How many times a matrix is applied (``source.size / n_in``); 1 for a stencil."""
+    if isinstance(proj, MatrixProjection):
+        src = pops[proj.source]
+        return src.size // prod(src.shape[a] for a in proj.contract)
+    return 1
+
+
+def _stage_of(pop) -> str:
+    return pop.origin.get("node", pop.id)
+
+
+def _reached(network: SpikingNetwork, source: str, projs: list) -> int:
+    """Neurons of ``source`` with a synapse in any of ``projs`` (vectorized in chunks)."""
+    pops = network.population
+    pop = pops[source]
+    infos = [projection_info(p, pop, pops[p.target]) for p in projs]
+    if all(isinstance(p, MatrixProjection) and p.contract == projs[0].contract for p in projs):
+        rownz = np.logical_or.reduce([i.rownz for i in infos])  # same rows in every repetition
+        return repetitions(projs[0], pops) * int(rownz.sum())
+    total = 0
+    for lo in range(0, pop.size, 1 << 22):
+        flat = np.arange(lo, min(pop.size, lo + (1 << 22)), dtype=np.int64)
+        has = np.zeros(flat.size, bool)
+        for info in infos:
+            has |= has_synapse_out(info, pop, flat)
+        total += int(has.sum())
+    return total
+
+
+def stage_rows(network: SpikingNetwork, *, split=None, placement=None, net_index: int = 0,
+               bits_per_synapse: int = 0, sim=None) -> list[dict]:
+    """One row per stage of ``network`` (see the module docstring).
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        A validated network.
+    split : SplitRecord, optional
+        Its split (for ``synapse_memory_bits`` and ``blocks``).
+    placement : Placement, optional
+        The placement (for ``cores``).
+    net_index : int
+        The network's index in the placement.
+    bits_per_synapse : int
+        The target's entry width.
+    sim : SimResult, optional
+        A simulation of ``network`` (for the measured spikes and events).
+
+    Returns
+    -------
+    list of dict
+    """
+    pops = network.population
+    bound = spike_bound(network)
+    order = []
+    members: dict[str, list] = {}
+    for p in network.populations:
+        key = _stage_of(p)
+        if key not in members:
+            order.append(key)
+            members[key] = []
+        members[key].append(p)
+    rows = []
+    for key in order:
+        neurons = [p for p in members[key] if not p.source]
+        if not neurons:
+            continue
+        ids = {p.id for p in neurons}
+        projs = [q for q in network.projections if q.target in ids]
+        outside: dict[str, list] = {}
+        for q in projs:
+            if q.source not in ids:
+                outside.setdefault(q.source, []).append(q)
+        r = 0
+        for q in projs:
+            r = gcd(r, repetitions(q, pops))
+        r = r or 1
+        n_in = sum(_reached(network, s, qs) for s, qs in outside.items())
+        n_neu = sum(p.size for p in neurons)
+        n_syn = sum(nominal_synapses(q, pops) for q in projs)
+        motifs = sorted({p.origin.get("motif", "") for p in neurons} - {""})
+        row = {
+            "node": key, "motif": "+".join(motifs) or None, "network": network.name,
+            "inputs": n_in // r if n_in % r == 0 else n_in / r,
+            "neurons": n_neu // r if n_neu % r == 0 else n_neu / r,
+            "synapses": n_syn // r if n_syn % r == 0 else n_syn / r,
+            "time_steps": network.n_steps, "repetitions": r,
+            "inputs_total": n_in, "neurons_total": n_neu, "synapses_total": n_syn,
+            "synapses_stored": sum(q.n_synapses for q in projs),
+            "spikes_bound": sum(p.size * bound[p.id] for p in neurons),
+            "synaptic_events_bound": sum(bound[q.source] * nominal_synapses(q, pops)
+                                         for q in projs),
+        }
+        if split is not None:
+            dem = [split.demand[p.id] for p in neurons if p.id in split.demand]
+            row["blocks"] = sum(d.blocks.n_blocks for d in dem)
+            row["synapse_memory_bits"] = int(sum(int(d.entries.sum()) for d in dem)
+                                             * bits_per_synapse)
+        if placement is not None:
+            row["cores"] = len({c for p in neurons for c in placement.cores_of(net_index, p.id)})
+        if sim is not None:
+            row["spikes_measured"] = sum(sim.spike_counts.get(p.id, 0) for p in neurons) \
+                / sim.n_frames
+            row["synaptic_events_measured"] = sum(sim.synaptic_events.get(q.id, 0)
+                                                  for q in projs) / sim.n_frames
+        rows.append(row)
+    return rows

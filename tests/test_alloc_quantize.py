@@ -1,0 +1,111 @@
+"""Quantize: hand-worked scales and errors, relay chains exactly equivalent, clear errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from backends.reference import simulate
+from compiler.hardware import HardwareProfile, load_profile
+from compiler.hardware.reference_networks import os_cfar_network
+from compiler.passes.quantize import quantize
+from compiler.snn import (
+    Encoder,
+    LatencyCode,
+    MatrixProjection,
+    NeuronParams,
+    Population,
+    SpikingNetwork,
+    StencilProjection,
+)
+from ir.errors import BudgetError
+
+CODE = LatencyCode(t_max=10, x_min=0.0, x_max=1.0)
+
+
+def small(weights, v_th=0.5, delays=None, stencil=False) -> SpikingNetwork:
+    origin = {"node": "n", "motif": "m"}
+    if stencil:
+        proj = StencilProjection(id="w", source="x", target="y", axes=("i",), kernel=weights,
+                                 edge=("clip",), delays=delays, origin=origin)
+        shapes = ({"i": 4}, {"i": 4})
+    else:
+        proj = MatrixProjection(id="w", source="x", target="y", contract=("i",),
+                                produce=("o",), weights=weights, delays=delays, origin=origin)
+        shapes = ({"i": weights.shape[0]}, {"o": weights.shape[1]})
+    return SpikingNetwork(name="s", n_steps=30, populations=[
+        Population(id="x", shape=shapes[0], source=True),
+        Population(id="y", shape=shapes[1], params=NeuronParams(v_th=v_th), origin=origin)],
+        projections=[proj], encoders=[Encoder(port="x", population="x", code=CODE)]).validate()
+
+
+def test_hand_worked_scale_and_errors():
+    net = small(np.array([[1.0, 0.0], [-0.3, 0.25]]))
+    q, rec = quantize(net, load_profile("loihi"))
+    # scale = 1/127: 1 -> 127, -0.3 -> -38.1 -> -38, 0.25 -> 31.75 -> 32; v_th 0.5 -> 63.5 -> 64
+    assert q.projection["w"].weights.tolist() == [[127.0, 0.0], [-38.0, 32.0]]
+    assert q.population["y"].params.v_th == 64.0
+    r = rec.projections["w"]
+    assert r["scale"] == pytest.approx(1 / 127)
+    assert r["max_abs_error"] == pytest.approx(abs(32 / 127 - 0.25))   # 0.00197
+    assert r["mean_abs_error"] == pytest.approx((0 + abs(-38 / 127 + 0.3) + abs(32 / 127 - 0.25))
+                                                / 3)
+    assert rec.populations["y"]["threshold_error"] == pytest.approx(abs(64 / 127 - 0.5))
+    assert q.population["y"].params.is_integer()
+
+
+def test_unbounded_changes_nothing():
+    net = small(np.array([[0.3]]))
+    q, rec = quantize(net, None)
+    assert q.projection["w"].weights.tolist() == [[0.3]] and rec.projections == {}
+
+
+def test_threshold_beyond_its_bits_names_the_node():
+    with pytest.raises(BudgetError, match=r"node 'n' \(motif m.*threshold 127000000.*17 "
+                       r"threshold bits of loihi"):
+        quantize(small(np.array([[1.0]]), v_th=1e6), load_profile("loihi"))
+
+
+def test_long_delay_error_mode():
+    net = small(np.array([[1.0]]), delays=np.array([[70]]))
+    with pytest.raises(BudgetError, match=r"node 'n'.*delay of 70 steps.*at most 63 \(6 delay "
+                       r"bits\).*long_delays='relay'"):
+        quantize(net, load_profile("loihi"))
+
+
+@given(st.lists(st.integers(0, 12), min_size=6, max_size=6), st.integers(1, 3),
+       st.lists(st.floats(0, 1), min_size=3, max_size=3))
+def test_relay_chains_deliver_every_spike_at_the_same_step(delays, bits, x):
+    # 3 inputs -> 2 IF neurons, per-synapse delays up to 12 with 1..3 delay bits (max 1..7)
+    w = np.array([[0.6, 0.5], [0.4, -0.3], [0.5, 0.7]])
+    net = small(w, v_th=0.5, delays=np.array(delays).reshape(3, 2))
+    prof = HardwareProfile(name="d", delay_bits=bits)
+    relayed, rec = quantize(net, prof, long_delays="relay")
+    relayed.validate()
+    assert all(p.max_delay <= prof.max_delay_steps for p in relayed.projections)
+    a = simulate(net, {"x": np.array(x)})
+    b = simulate(relayed, {"x": np.array(x)})
+    np.testing.assert_array_equal(a.first_spike_steps["y"], b.first_spike_steps["y"])
+    assert a.spike_counts["y"] == b.spike_counts["y"]
+
+
+def test_relay_for_stencil_taps():
+    net = small(np.array([0.3, 0.0, 0.6]), v_th=0.5, delays=np.array([9, 0, 2]), stencil=True)
+    relayed, rec = quantize(net, HardwareProfile(name="d", delay_bits=2), long_delays="relay")
+    assert rec.relays == ["x__relay1", "x__relay2"]  # 9 = 3 (relay 1) + 3 (relay 2) + 3
+    x = np.array([0.9, 0.1, 0.5, 0.7])
+    a, b = simulate(net, {"x": x}), simulate(relayed.validate(), {"x": x})
+    np.testing.assert_array_equal(a.first_spike_steps["y"], b.first_spike_steps["y"])
+
+
+def test_quantized_cfar_runs_in_integer_arithmetic_with_the_same_spikes():
+    net = os_cfar_network(16, 32, k=40)
+    q, rec = quantize(net, load_profile("loihi"))
+    # kernel peak 40.5 -> 127: training weight -1 -> round(-3.136) = -3, CUT 127
+    assert sorted(np.unique(q.projections[0].kernel).tolist()) == [-3.0, 0.0, 127.0]
+    x = np.random.default_rng(0).random((2, 16, 32))
+    f = simulate(q, {"det_in": x}, arithmetic="float64")
+    i = simulate(q, {"det_in": x}, arithmetic="int64")
+    np.testing.assert_array_equal(f.first_spike_steps["det"], i.first_spike_steps["det"])

@@ -1,0 +1,68 @@
+"""Hardware profiles: built-ins carry the public figures, user YAML loads, errors name the field."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from compiler.hardware import BUILTIN_PROFILES, HardwareProfile, load_profile
+from ir.errors import CompileError
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_loihi_figures_from_notes():
+    p = load_profile("loihi")
+    assert (p.cores_per_chip, p.neurons_per_core, p.input_axons_per_core,
+            p.output_axons_per_core) == (128, 1024, 4096, 4096)
+    assert p.synapse_memory_bits_per_core == 16_384 * 64
+    assert (p.weight_bits, p.threshold_bits, p.delay_bits, p.max_delay_steps) == (8, 17, 6, 63)
+    assert not p.shared_weights_per_core
+    assert p.limits().tolist() == [1024, 4096, 4096, 1_048_576]
+
+
+def test_other_builtins():
+    assert load_profile("loihi2").neurons_per_core == 8192
+    assert load_profile("spinnaker2").cores_per_chip == 152
+    assert load_profile("spinnaker2").neurons_per_core == 256
+    u = load_profile(None)
+    assert u.name == "unbounded" and u.n_cores is None and u.max_delay_steps is None
+    assert np.isinf(u.limits()).all()
+
+
+@pytest.mark.parametrize("name", BUILTIN_PROFILES)
+def test_every_builtin_field_has_a_source_comment(name):
+    text = (ROOT / "compiler" / "hardware" / "profiles" / f"{name}.yaml").read_text()
+    fields = [ln for ln in text.splitlines() if re.match(r"^[a-z_]+:", ln)]
+    assert {ln.split(":")[0] for ln in fields} == set(HardwareProfile.model_fields)
+    missing = [ln for ln in fields if "#" not in ln and not ln.startswith(("name:", "desc"))]
+    assert not missing
+
+
+def test_user_profile_file(tmp_path):
+    p = load_profile(ROOT / "examples" / "profiles" / "my_chip.yaml")
+    assert (p.name, p.n_cores, p.max_delay_steps) == ("my_chip", 256, 31)
+    f = tmp_path / "tiny.yml"
+    f.write_text("name: tiny\nneurons_per_core: 4\ncores_per_chip: 2\nchips: 1\n")
+    assert load_profile(str(f)).n_cores == 2
+    assert load_profile(load_profile("loihi")).name == "loihi"
+
+
+def test_errors_name_the_field_and_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: bad\nneurons_per_core: 0\n")
+    with pytest.raises(CompileError, match=r"bad\.yaml.*neurons_per_core.*0.*greater than"):
+        load_profile(bad)
+    bad.write_text("name: bad\nneurons: 3\n")
+    with pytest.raises(CompileError, match="neurons.*Extra inputs"):
+        load_profile(bad)
+    bad.write_text("- 1\n- 2\n")
+    with pytest.raises(CompileError, match="expected a mapping"):
+        load_profile(bad)
+    with pytest.raises(CompileError, match="cannot be read"):
+        load_profile(tmp_path / "missing.yaml")
+    with pytest.raises(CompileError, match="unknown hardware profile 'tpu'"):
+        load_profile("tpu")
