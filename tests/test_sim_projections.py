@@ -217,3 +217,33 @@ def test_plan_memory_flat_in_repetitions(sparse: bool) -> None:
     assert w.shape == (4, 3)
     if not sparse:  # dense without delays: the projection's own array, not a copy
         assert w is big.network.projection["w"].weights
+
+
+def test_matrix_projection_with_no_contracted_axis_broadcasts_each_neuron():
+    """``contract=()``: every source neuron is one row (n_in = 1) feeding the produced axes."""
+    import numpy as np
+
+    from backends.reference import simulate
+    from compiler.snn import (
+        Decoder,
+        Encoder,
+        LatencyCode,
+        MatrixProjection,
+        NeuronParams,
+        Population,
+        SpikingNetwork,
+    )
+
+    net = SpikingNetwork(
+        name="fanout", n_steps=4,
+        populations=[Population(id="a", shape={"r": 3}, source=True),
+                     Population(id="b", shape={"r": 3, "o": 2},
+                                params=NeuronParams(v_th=1.0, reset="fire_once"))],
+        projections=[MatrixProjection(id="w", source="a", target="b", contract=(),
+                                      produce=("o",), weights=np.array([[1.0, 0.5]]))],
+        encoders=[Encoder(port="x", population="a",
+                          code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
+        decoders=[Decoder(port="y", population="b", kind="spiked")])
+    for mode in ("step", "closed"):
+        out = simulate(net, {"x": np.array([1.0, 0.0, 1.0])}, mode=mode).outputs["y"]
+        assert out.tolist() == [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0]]

@@ -116,8 +116,9 @@ class MatrixDelivery:
         rep_dims = tuple(tgt.shape[a] for a in rep_axes)
         rep_of = (np.ravel_multi_index(tuple(coord[a] for a in rep_axes), rep_dims)
                   if rep_axes else np.zeros(src.size, np.int64))
-        col_of = np.ravel_multi_index(tuple(coord[a] for a in proj.contract),
-                                      tuple(src.shape[a] for a in proj.contract))
+        col_of = (np.ravel_multi_index(tuple(coord[a] for a in proj.contract),
+                                       tuple(src.shape[a] for a in proj.contract))
+                  if proj.contract else np.zeros(src.size, np.int64))
         block_axes = rep_axes + proj.produce
         return cls(
             id=proj.id, source=proj.source, target=proj.target, delays=delays, weights=weights,
