@@ -63,10 +63,11 @@ def _window(node_id: str, op: Window, args: list, types: list) -> np.ndarray:
 
 
 def _dft(node_id: str, op: DFT, args: list, types: list) -> np.ndarray:
-    from radar.dsp import dft
+    from radar.dsp import apply_window, dft
 
     ax = types[0].index(op.axis)
-    return dft(args[0], axis=ax, n_fft=op.n_fft, keep=op.keep, shift=op.shift)
+    x = args[0] if op.window is None else apply_window(args[0], op.window, axis=ax)
+    return dft(x, axis=ax, n_fft=op.n_fft, keep=op.keep, shift=op.shift)
 
 
 def _linear(node_id: str, op: Linear, args: list, types: list) -> np.ndarray:

@@ -8,6 +8,7 @@ Per neuron, by the decoder's ``kind`` (registry :data:`DECODERS`):
 ``count``       ``scale·count + offset``
 ``membrane``    ``scale·v + offset`` with ``v`` after the last step
 ``spiked``      ``1.0`` where the neuron fired, else ``0.0``
+``spike_table`` ``scale·table[t_s − t_ref] + offset``; ``missing`` otherwise
 ==============  ===========================================================
 
 then :func:`~compiler.snn.combine_parts` folds the trailing ``part`` axis.
@@ -45,12 +46,17 @@ def _spiked(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
     return (act.counts[pid] > 0).astype(np.float64)
 
 
+def _spike_table(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+    return dec.table_values(act.first_spike[pid])
+
+
 #: Decoding functions by decoder ``kind``: ``(decoder, activity, population) -> (frames, size)``.
 DECODERS: dict[str, Callable[[Decoder, Activity, str], np.ndarray]] = {
     "spike_time": _spike_time,
     "count": _count,
     "membrane": _membrane,
     "spiked": _spiked,
+    "spike_table": _spike_table,
 }
 
 

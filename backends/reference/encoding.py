@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, split_values
+from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
 from ir.errors import NetworkError, SimulationError
 
@@ -201,9 +201,21 @@ def encode_inputs(
     out = {}
     for port, enc in ports.items():
         x = arrays[port] if n is not None else arrays[port][None]
+        x = normalize_values(x, _normalize_axes(network, enc))
         parts = split_values(x, enc.split).reshape(n_frames, -1)
         out[enc.population] = trains[enc.code.type](enc.code, parts, network.n_steps)
     return out, n_frames, n is not None
+
+
+def _normalize_axes(network: SpikingNetwork, enc) -> tuple[int, ...]:
+    """Indices (in ``(frames, *value_shape)``) of the encoder's ``normalize_axes``."""
+    names = network.population[enc.population].axes
+    names = names[:-1] if N_PARTS[enc.split] else names
+    unknown = [a for a in enc.normalize_axes if a not in names]
+    if unknown:
+        raise NetworkError(f"encoder {enc.port!r}: normalize_axes {unknown} are not axes of its "
+                           f"value {list(names)}; name value axes (not 'part')", node=enc.port)
+    return tuple(1 + names.index(a) for a in enc.normalize_axes)
 
 
 def _check_array(

@@ -20,6 +20,12 @@ Regular rate code with deterministic phase: the rate is
 ``r = r_max (x - x_min)/(x_max - x_min)`` spikes per step and a spike falls on
 step ``t`` iff ``floor((t+1)·r + φ) > floor(t·r + φ)``.
 
+Per-input normalisation (``Encoder.normalize_axes``): before splitting, each
+slice over those axes is divided by its largest ``max(|Re x|, |Im x|)``
+(:func:`normalize_values`; an all-zero slice stays zero), so every chirp or
+frame uses the code's whole range; decoded outputs are then in those
+normalised units.
+
 Value splitting (``split``) puts signed or complex values on a trailing
 ``part`` axis: ``re_im`` → (Re, Im); ``signed`` → (relu(x), relu(−x));
 ``re_im_signed`` → (relu Re, relu −Re, relu Im, relu −Im).  Decoders'
@@ -50,6 +56,7 @@ __all__ = [
     "Split",
     "split_values",
     "combine_parts",
+    "normalize_values",
     "N_PARTS",
 ]
 
@@ -189,6 +196,9 @@ class Encoder(_Frozen):
         How signed/complex values are spread over the ``part`` axis.
     node : str
         The radar-IR node the port stands for.
+    normalize_axes : tuple of str
+        Value axes to normalise over at run time (per-input calibration, see
+        :func:`normalize_values`); empty: values are encoded as given.
     """
 
     port: str
@@ -196,6 +206,7 @@ class Encoder(_Frozen):
     code: LatencyCode | RateCode = Field(discriminator="type")
     split: Split = "none"
     node: str = ""
+    normalize_axes: tuple[str, ...] = ()
 
 
 class Decoder(_Frozen):
@@ -208,6 +219,9 @@ class Decoder(_Frozen):
     ``count``       ``y = scale·count + offset`` (number of spikes in the frame).
     ``membrane``    ``y = scale·v + offset`` at the end of the frame.
     ``spiked``      ``y = 1.0`` where the neuron fired, else ``0.0`` (detection masks).
+    ``spike_table`` ``y = scale·table[t_s − t_ref] + offset`` (a non-uniform time code,
+                    e.g. a companding charging schedule); ``missing`` without a spike
+                    or outside the table.
 
     Parameters
     ----------
@@ -223,13 +237,14 @@ class Decoder(_Frozen):
 
     port: str
     population: str
-    kind: Literal["spike_time", "count", "membrane", "spiked"]
+    kind: Literal["spike_time", "count", "membrane", "spiked", "spike_table"]
     scale: float = 1.0
     offset: float = 0.0
     t_ref: float = 0.0
     missing: float = 0.0
     combine: Split = "none"
     node: str = ""
+    table: tuple[float, ...] = ()
 
     @model_validator(mode="after")
     def _finite(self) -> Decoder:
@@ -238,7 +253,45 @@ class Decoder(_Frozen):
         if bad:
             raise ValueError(f"decoder {self.port!r}: {bad} must be finite (only `missing` may "
                              "be NaN or infinite)")
+        if self.kind == "spike_table" and not (self.table and float(self.t_ref).is_integer()
+                                               and np.all(np.isfinite(self.table))):
+            raise ValueError(f"decoder {self.port!r}: kind 'spike_table' needs a non-empty "
+                             f"finite table and an integer t_ref (its first step), got "
+                             f"{len(self.table)} entries and t_ref={self.t_ref}")
         return self
+
+    def table_values(self, first_spike: np.ndarray) -> np.ndarray:
+        """``spike_table`` decoding of first-spike steps (``-1``: no spike).
+
+        Examples
+        --------
+        >>> d = Decoder(port="y", population="p", kind="spike_table", table=(4.0, 1.0),
+        ...             t_ref=10, scale=0.5, missing=-1.0)
+        >>> d.table_values(np.array([10, 11, 12, -1])).tolist()
+        [2.0, 0.5, -1.0, -1.0]
+        """
+        k = np.asarray(first_spike, dtype=np.int64) - int(self.t_ref)
+        inside = (np.asarray(first_spike) >= 0) & (k >= 0) & (k < len(self.table))
+        table = np.asarray(self.table, dtype=np.float64)
+        return np.where(inside, self.scale * table[np.clip(k, 0, len(table) - 1)] + self.offset,
+                        self.missing)
+
+
+def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+    """Divide each slice over ``axes`` by its largest ``max(|Re|, |Im|)`` (zero slices stay 0).
+
+    Examples
+    --------
+    >>> normalize_values(np.array([[2.0, -4.0], [0.0, 0.0]]), axes=(1,)).tolist()
+    [[0.5, -1.0], [0.0, 0.0]]
+    >>> normalize_values(np.array([3.0 - 6.0j]), axes=(0,)).tolist()
+    [(0.5-1j)]
+    """
+    x = np.asarray(x)
+    if not axes:
+        return x
+    peak = np.maximum(np.abs(np.real(x)), np.abs(np.imag(x))).max(axis=axes, keepdims=True)
+    return x / np.where(peak > 0, peak, 1.0)
 
 
 def split_values(x: np.ndarray, split: Split) -> np.ndarray:

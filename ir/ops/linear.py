@@ -78,6 +78,10 @@ class DFT(Op):
         :math:`0 \dots N_\mathrm{fft}/2 - 1` (floor), as for real input samples.
     shift : bool, default False
         Apply ``fftshift`` to the kept bins (zero frequency to the middle), as for Doppler.
+    window : {"hann", "hamming", "blackman", "rect"}, optional
+        A window folded into the transform, :math:`X[k] = \sum_n w[n]\,x[n]\,e^{\dots}`
+        (what the ``fuse-linear`` pass writes when it folds a ``window`` node in;
+        default: none).
 
     Notes
     -----
@@ -99,6 +103,7 @@ class DFT(Op):
     n_fft: PositiveInt | None = None
     keep: Literal["all", "positive"] = "all"
     shift: bool = False
+    window: WindowKind | None = None
 
     def n_points(self, size: int) -> int:
         """DFT length for an input axis of ``size`` samples."""

@@ -1,0 +1,186 @@
+r"""What the ``calibrate`` pass decides: value ranges per node, and the policy that produced them.
+
+Per IR node, a :class:`NodeCalibration` records the range of its value over
+the calibration set (or the worst case propagated from declared input
+bounds): ``max |Re|``, ``max |Im|``, ``max |x|``, ``max (|Re| + |Im|)``, the
+real parts' min and max, and quantiles of the ``|Re|, |Im|`` parts and of
+``|x|`` (what a companding charging schedule is fitted to).  The motifs set
+encoder ranges and thresholds from ``max_part · headroom`` with
+
+.. math:: \text{max\_part} = \max(\max|\mathrm{Re}\,x|, \max|\mathrm{Im}\,x|).
+
+Examples
+--------
+>>> import numpy as np
+>>> c = measure("x", np.array([3.0 - 4.0j, -1.0 + 0.5j]))
+>>> c.max_re, c.max_im, c.max_abs, c.max_l1, c.max_part
+(3.0, 4.0, 5.0, 7.0, 4.0)
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+__all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy",
+           "synthetic_inputs"]
+
+#: Number of quantiles kept per node (0 %, 1/256, …, 100 %).
+N_QUANTILES = 257
+
+Policy = Literal["static", "per-input"]
+
+
+@dataclass(frozen=True)
+class NodeCalibration:
+    """The value range of one IR node (value units of the IR, after any normalisation).
+
+    Parameters
+    ----------
+    node : str
+        IR node id.
+    max_re, max_im, max_abs, max_l1 : float
+        Largest ``|Re x|``, ``|Im x|``, ``|x|`` and ``|Re x| + |Im x|``.
+    min, max : float
+        Smallest and largest real part.
+    part_quantiles, abs_quantiles : tuple of float
+        :data:`N_QUANTILES` quantiles of the pooled ``|Re|, |Im|`` values and of ``|x|``
+        (empty when derived from bounds).
+    normalize_axes : tuple of str
+        For a graph input under ``per-input``: the axes its encoder normalises over.
+    source : {"inputs", "bounds"}
+        Measured on calibration inputs, or propagated from declared input bounds.
+    """
+
+    node: str
+    max_re: float
+    max_im: float
+    max_abs: float
+    max_l1: float
+    min: float
+    max: float
+    part_quantiles: tuple[float, ...] = ()
+    abs_quantiles: tuple[float, ...] = ()
+    normalize_axes: tuple[str, ...] = ()
+    source: Literal["inputs", "bounds"] = "inputs"
+
+    @property
+    def max_part(self) -> float:
+        """``max(max_re, max_im)``: the full scale of one ``part`` neuron."""
+        return max(self.max_re, self.max_im)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        d = asdict(self)
+        d["part_quantiles"] = list(self.part_quantiles)
+        d["abs_quantiles"] = list(self.abs_quantiles)
+        d["normalize_axes"] = list(self.normalize_axes)
+        return d
+
+
+@dataclass
+class Calibration:
+    """The ``calibrate`` pass's record (``program.records["calibrate"]``).
+
+    Parameters
+    ----------
+    policy : {"static", "per-input"}
+        ``static``: fixed ranges, nothing adapts at run time; ``per-input``: each
+        input slice is normalised by its encoder, ranges hold for normalised values.
+    headroom : float
+        Factor applied to the measured maxima by the motifs (>= 1 leaves room for
+        inputs larger than the calibration set).
+    source : {"inputs", "bounds", "none"}
+        Where the ranges came from (``none``: static without inputs or bounds).
+    nodes : dict of str to NodeCalibration
+        Per IR node.
+    n_frames : int
+        Calibration frames used (0 for bounds).
+    """
+
+    policy: Policy
+    headroom: float
+    source: Literal["inputs", "bounds", "none"]
+    nodes: dict[str, NodeCalibration] = field(default_factory=dict)
+    n_frames: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        return {"policy": self.policy, "headroom": self.headroom, "source": self.source,
+                "n_frames": self.n_frames, "nodes": {k: v.to_dict() for k, v in self.nodes.items()}}
+
+
+def _quantiles(x: np.ndarray) -> tuple[float, ...]:
+    if x.size == 0:
+        return ()
+    return tuple(float(v) for v in np.quantile(x, np.linspace(0, 1, N_QUANTILES)))
+
+
+def _top(a: np.ndarray) -> float:
+    return float(a.max()) if a.size else 0.0
+
+
+def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = ()
+            ) -> NodeCalibration:
+    """The :class:`NodeCalibration` of ``values`` (all calibration frames of one node).
+
+    Parameters
+    ----------
+    node : str
+        IR node id.
+    values : ndarray
+        Real or complex values (any shape).
+    normalize_axes : tuple of str
+        Recorded as is (for per-input inputs).
+
+    Returns
+    -------
+    NodeCalibration
+
+    Examples
+    --------
+    >>> measure("x", np.array([-2.0, 1.0])).min, measure("x", np.array([-2.0, 1.0])).max_abs
+    (-2.0, 2.0)
+    """
+    v = np.asarray(values)
+    re, im = np.abs(np.real(v)).astype(np.float64), np.abs(np.imag(v)).astype(np.float64)
+    mag = np.abs(v).astype(np.float64)
+    parts = np.concatenate([re.ravel(), im.ravel()]) if np.iscomplexobj(v) else re.ravel()
+    return NodeCalibration(node=node, max_re=_top(re), max_im=_top(im), max_abs=_top(mag),
+                           max_l1=_top(re + im), min=float(np.real(v).min()) if v.size else 0.0,
+                           max=float(np.real(v).max()) if v.size else 0.0,
+                           part_quantiles=_quantiles(parts), abs_quantiles=_quantiles(mag.ravel()),
+                           normalize_axes=tuple(normalize_axes))
+
+
+def synthetic_inputs(graph, *, seed: int = 0) -> dict[str, np.ndarray]:
+    """Seeded unit-variance Gaussian noise for every input node of ``graph``.
+
+    A stand-in calibration set for when only the *cost* of a chain matters
+    (``radarsnn report`` without ``--calibration``): every neuron, synapse, step
+    and core count is independent of the values, but thresholds calibrated on
+    noise say nothing about accuracy on radar data.
+
+    Examples
+    --------
+    >>> from ir import Graph
+    >>> g = Graph.from_dict({"name": "x", "nodes": [
+    ...     {"id": "adc", "op": "adc_input", "shape": {"chirp": 2, "sample": 4}, "complex": True},
+    ...     {"id": "o", "op": "output", "input": "adc"}]})
+    >>> x = synthetic_inputs(g)["adc"]
+    >>> x.shape, x.dtype
+    ((2, 4), dtype('complex128'))
+    """
+    rng = np.random.default_rng(seed)
+    types = graph.infer_types()
+    out = {}
+    for node in graph.input_ids():
+        t = types[node]
+        shape = tuple(t.axes.values())
+        x = rng.standard_normal(shape)
+        if t.complex:
+            x = (x + 1j * rng.standard_normal(shape)) / np.sqrt(2.0)
+        out[node] = x
+    return out

@@ -1,0 +1,171 @@
+r"""The ``calibrate`` pass: value ranges per node, from which motifs set encoders and thresholds.
+
+Policies (compile option ``calibration``):
+
+``static``
+    Ranges from the calibration inputs (``CompileContext.calibration_inputs``,
+    one array per graph input, optionally with a leading frames axis) or, if
+    none are given, propagated from declared input bounds (option
+    ``input_bounds``: input node id → largest ``|Re|``/``|Im|``).  Nothing adapts
+    at run time; the motifs scale by ``headroom`` (option ``headroom``, default 1).
+``per-input``
+    Each graph input's encoder normalises every slice over the axes that the
+    chain later mixes (those contracted by ``dft``/``linear`` or summed by
+    ``sum``) so its largest part is 1; ranges are measured on the normalised
+    calibration inputs (or propagated from bound 1).  Decoded values are in
+    those normalised units.
+
+Bound propagation (no calibration inputs): ``window`` keeps the bound,
+``dft``/``linear`` give ``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from ir import Graph
+>>> from compiler.passes.base import CompileContext
+>>> from compiler.program import CompiledProgram
+>>> g = Graph.from_dict({"name": "x", "nodes": [
+...     {"id": "a", "op": "input", "shape": {"sample": 4}},
+...     {"id": "f", "op": "dft", "input": "a", "axis": "sample"},
+...     {"id": "o", "op": "output", "input": "f"}]})
+>>> ctx = CompileContext(calibration_inputs={"a": np.array([1.0, 0.0, -1.0, 0.0])})
+>>> rec = Calibrate().apply(ctx, CompiledProgram(graph=g)).records["calibrate"]
+>>> rec.policy, rec.nodes["f"].max_re, rec.nodes["f"].max_im
+('static', 2.0, 0.0)
+>>> ctx = CompileContext(options={"calibration": "per-input"})
+>>> rec = Calibrate().apply(ctx, CompiledProgram(graph=g)).records["calibrate"]
+>>> rec.source, rec.nodes["a"].normalize_axes, rec.nodes["f"].max_part
+('bounds', ('sample',), 4.0)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import networkx as nx
+import numpy as np
+
+from compiler.calibration import Calibration, NodeCalibration, measure
+from compiler.lowering.dft_common import op_weights
+from compiler.passes.base import CompileContext, Pass
+from compiler.program import CompiledProgram
+from compiler.snn.coding import normalize_values
+from ir import Graph
+from ir.errors import CompileError
+from ir.evaluate import evaluate
+from ir.ops import DFT, Linear, Sum, Window
+
+__all__ = ["Calibrate", "mixed_axes"]
+
+_POLICIES = ("static", "per-input")
+
+
+def mixed_axes(graph: Graph, node: str) -> tuple[str, ...]:
+    """Axes of input ``node`` that a downstream ``dft``/``linear``/``sum`` mixes (input order).
+
+    Examples
+    --------
+    >>> from compiler.chains import range_doppler_chain
+    >>> from radar.config import preset
+    >>> mixed_axes(range_doppler_chain(preset("carrada")), "adc")
+    ('rx', 'chirp', 'sample')
+    """
+    axes = graph.infer_types()[node].names
+    below = nx.descendants(graph.to_networkx(), node)
+    mixed = {graph.op(n).axis for n in below if isinstance(graph.op(n), DFT | Linear | Sum)}
+    return tuple(a for a in axes if a in mixed)
+
+
+def _frames(graph: Graph, inputs: dict) -> tuple[list[dict[str, np.ndarray]], int]:
+    types = graph.infer_types()
+    arrays, counts = {}, set()
+    for node in graph.input_ids():
+        if node not in inputs:
+            raise CompileError(f"calibration: no calibration array for input {node!r}; give one "
+                               f"per graph input ({graph.input_ids()})", node=node)
+        x, want = np.asarray(inputs[node]), types[node].shape
+        if x.shape == want:
+            x = x[None]
+        elif x.shape[1:] != want:
+            raise CompileError(f"calibration: input {node!r} has shape {x.shape}; expected {want} "
+                               f"or (n_frames, *{want})", node=node)
+        arrays[node] = x
+        counts.add(x.shape[0])
+    if len(counts) != 1:
+        raise CompileError(f"calibration: inputs disagree on the number of frames {sorted(counts)}")
+    n = counts.pop()
+    return [{k: v[i] for k, v in arrays.items()} for i in range(n)], n
+
+
+def _propagate(graph: Graph, bounds: dict[str, float]) -> dict[str, NodeCalibration]:
+    types = graph.infer_types()
+    out: dict[str, float] = {}
+    for node in graph.topological_order():
+        op, args = graph.op(node), graph.inputs_of(node)
+        if node in bounds:
+            out[node] = float(bounds[node])
+        elif isinstance(op, Window) and args[0] in out:
+            out[node] = out[args[0]]
+        elif isinstance(op, DFT | Linear) and args[0] in out:
+            w = op_weights(op, types[args[0]].axes[op.axis], node=node)
+            out[node] = float((np.abs(w.real) + np.abs(w.imag)).sum(axis=1).max()) * out[args[0]]
+    return {n: NodeCalibration(node=n, max_re=b, max_im=b if types[n].complex else 0.0,
+                               max_abs=b * (math.sqrt(2) if types[n].complex else 1.0),
+                               max_l1=2 * b if types[n].complex else b, min=-b, max=b,
+                               source="bounds") for n, b in out.items()}
+
+
+@dataclass(frozen=True)
+class Calibrate(Pass):
+    """Measure (or bound) every node's range under the chosen policy; see the module docstring.
+
+    Records :class:`~compiler.calibration.Calibration` as ``records["calibrate"]``.
+
+    Under ``static`` with neither calibration inputs nor ``input_bounds`` nothing
+    is measured (``source="none"``, no node records): chains without calibrated
+    motifs compile unchanged, and a motif that needs a range raises a
+    :class:`~ir.errors.CompileError` naming the node and the fix.
+
+    Raises
+    ------
+    CompileError
+        For an unknown policy or a bad headroom.
+    """
+
+    name = "calibrate"
+
+    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        policy = ctx.options.get("calibration") or "static"
+        headroom = float(ctx.options.get("headroom") or 1.0)
+        if policy not in _POLICIES:
+            raise CompileError(f"calibration={policy!r} is not a policy; use 'static' or "
+                               "'per-input'")
+        if not (math.isfinite(headroom) and headroom >= 1.0):
+            raise CompileError(f"headroom={headroom} must be a finite number >= 1")
+        graph, types = program.graph, program.graph.infer_types()
+        norm = {n: mixed_axes(graph, n) if policy == "per-input" else ()
+                for n in graph.input_ids()}
+        if ctx.calibration_inputs:
+            frames, n_frames = _frames(graph, dict(ctx.calibration_inputs))
+            per_node: dict[str, list[np.ndarray]] = {}
+            for frame in frames:
+                frame = {k: normalize_values(v, tuple(types[k].index(a) for a in norm[k]))
+                         for k, v in frame.items()}
+                for node, value in evaluate(graph, frame).items():
+                    if value.dtype != bool:
+                        per_node.setdefault(node, []).append(value)
+            nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()))
+                     for n, v in per_node.items()}
+            source = "inputs"
+        else:
+            bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"
+                      else dict(ctx.options.get("input_bounds") or {}))
+            nodes = _propagate(graph, bounds)
+            nodes = {n: c if n not in norm else
+                     NodeCalibration(**{**c.__dict__, "normalize_axes": norm[n]})
+                     for n, c in nodes.items()}
+            source, n_frames = ("bounds" if bounds else "none"), 0
+        program.records[self.name] = Calibration(policy=policy, headroom=headroom,
+                                                 source=source, nodes=nodes, n_frames=n_frames)
+        return program
