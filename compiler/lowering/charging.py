@@ -1,0 +1,229 @@
+r"""Charging schedules of the time-coded motifs: constant (the paper's) and companding.
+
+After its silent stage a ramp neuron holds the membrane ``V`` (its value in
+membrane units).  During the charging window of ``n`` steps the input is cut
+and a bias ``b_i`` is added each step; with the cumulative bias
+``B(k) = b_1 + … + b_k`` the neuron fires at charging step ``k`` (``1 … n``,
+absolute step ``start + k − 1``) the first time
+
+.. math:: V + B(k) \ge v_{th}, \qquad v_{th} = B(n) + b_n / 2 .
+
+So a spike at ``k`` says ``V ∈ [v_th − B(k), v_th − B(k−1))`` and decodes to the
+middle of that interval, ``level_k = v_th − (B(k) + B(k−1))/2``; no spike says
+``V < b_n/2`` and decodes to 0 (the negative half of a ± pair).  The error is at
+most half the local step, ``b_k/2``, below the saturation level ``level_1``.
+
+* **constant** (``b_k = b``): ``level_k = b·(n + 1 − k)``, linear in the spike
+  step — a downstream time-coded layer reads it directly, integrating until the
+  window end ``E = start + n``: ``E − t_s = level/b``.
+* **companding** (``b`` decreasing over a few piecewise-constant phases): large
+  values get coarse steps and the many small ones fine steps; decoding is the
+  exact table of levels.  Picked when it lowers the mean squared error on the
+  calibration values (:func:`choose_schedule`).
+
+Biases are dyadic (:func:`dyadic_ceil`), so every level is exact.
+
+Examples
+--------
+>>> s = constant_schedule(4, v_full=8.0)
+>>> s.biases, s.v_th, s.levels().tolist()
+((2.0,), 9.0, [8.0, 6.0, 4.0, 2.0])
+>>> s.decode(np.array([8.4, 2.9, 0.9, -3.0])).tolist()
+[8.0, 2.0, 0.0, 0.0]
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ir.errors import CompileError
+
+__all__ = [
+    "ChargingSchedule",
+    "constant_schedule",
+    "companding_schedule",
+    "choose_schedule",
+    "dyadic_ceil",
+    "COMPANDING_RATIOS",
+]
+
+#: Bias ratios between successive companding phases tried by :func:`choose_schedule`.
+COMPANDING_RATIOS = (0.7, 0.5, 0.35, 0.25)
+
+
+def dyadic_ceil(x: float, bits: int = 12) -> float:
+    """The smallest ``m·2**e ≥ x`` with an integer mantissa ``m < 2**bits`` (``x > 0``).
+
+    Examples
+    --------
+    >>> dyadic_ceil(3.0), dyadic_ceil(0.3, bits=4), dyadic_ceil(1000.5, bits=4)
+    (3.0, 0.3125, 1024.0)
+    """
+    if not (math.isfinite(x) and x > 0):
+        raise CompileError(f"a charging bias must be a positive finite number, got {x}")
+    e = math.frexp(x)[1] - bits
+    return math.ldexp(math.ceil(math.ldexp(x, -e)), e)
+
+
+@dataclass(frozen=True)
+class ChargingSchedule:
+    """Piecewise-constant charging bias: ``biases[i]`` from relative step ``starts[i]``.
+
+    Parameters
+    ----------
+    n_steps : int
+        Length ``n`` of the charging window.
+    starts : tuple of int
+        Relative first step of each phase (``starts[0] == 0``, increasing, ``< n``).
+    biases : tuple of float
+        Bias per phase (positive, dyadic).
+    """
+
+    n_steps: int
+    starts: tuple[int, ...]
+    biases: tuple[float, ...]
+
+    @property
+    def kind(self) -> str:
+        """``"constant"`` for one phase, else ``"companding"``."""
+        return "constant" if len(self.biases) == 1 else "companding"
+
+    def per_step(self) -> np.ndarray:
+        """The bias of each charging step ``k = 1 … n`` (length ``n``)."""
+        idx = np.searchsorted(np.asarray(self.starts), np.arange(self.n_steps), side="right") - 1
+        return np.asarray(self.biases, dtype=np.float64)[idx]
+
+    def cumulative(self) -> np.ndarray:
+        """``B(k)`` for ``k = 0 … n`` (exact: dyadic partial sums)."""
+        return np.concatenate([[0.0], np.cumsum(self.per_step())])
+
+    @property
+    def v_th(self) -> float:
+        """The threshold ``B(n) + b_n/2``."""
+        return float(self.cumulative()[-1] + self.biases[-1] / 2)
+
+    def levels(self) -> np.ndarray:
+        """Decoded membrane value of a spike at charging step ``k = 1 … n`` (decreasing)."""
+        b = self.cumulative()
+        return self.v_th - (b[1:] + b[:-1]) / 2
+
+    def fire_step(self, v: np.ndarray) -> np.ndarray:
+        """Charging step index ``k − 1`` (``0 … n−1``) at which membrane ``v`` fires; ``n``: never.
+
+        Examples
+        --------
+        >>> constant_schedule(4, v_full=8.0).fire_step(np.array([100.0, 6.9, 1.0, 0.5])).tolist()
+        [0, 1, 3, 4]
+        """
+        theta = self.v_th - self.cumulative()[1:]
+        return np.searchsorted(-theta, -np.asarray(v, dtype=np.float64), side="left")
+
+    def decode(self, v: np.ndarray) -> np.ndarray:
+        """What the neuron reports for membrane ``v``: its level, or 0 without a spike."""
+        k = self.fire_step(v)
+        return np.where(k < self.n_steps, np.append(self.levels(), 0.0)[k], 0.0)
+
+    def mse(self, v: np.ndarray) -> float:
+        """Mean squared decoding error over non-negative membrane values ``v``."""
+        v = np.asarray(v, dtype=np.float64)
+        return float(np.mean((self.decode(v) - v) ** 2)) if v.size else 0.0
+
+    def describe(self) -> dict:
+        """JSON-able description (kind, starts, biases, v_th)."""
+        return {"kind": self.kind, "n_steps": self.n_steps, "starts": list(self.starts),
+                "biases": list(self.biases), "v_th": self.v_th}
+
+
+def _check(n_steps: int, v_full: float) -> None:
+    if n_steps < 1 or not (math.isfinite(v_full) and v_full > 0):
+        raise CompileError(f"charging window needs n_steps >= 1 and a positive full scale; got "
+                           f"n_steps={n_steps}, full scale {v_full}")
+
+
+def constant_schedule(n_steps: int, v_full: float) -> ChargingSchedule:
+    """The paper's constant bias ``b = dyadic_ceil(v_full / n)`` (top level ``b·n ≥ v_full``).
+
+    Examples
+    --------
+    >>> constant_schedule(256, v_full=1000.0).biases
+    (3.90625,)
+    """
+    _check(n_steps, v_full)
+    return ChargingSchedule(n_steps, (0,), (dyadic_ceil(v_full / n_steps),))
+
+
+def companding_schedule(n_steps: int, v_full: float, ratio: float,
+                        n_phases: int = 4) -> ChargingSchedule:
+    r"""``n_phases`` equal phases with biases ``b_0·ratio^i`` and top level ``≥ v_full``.
+
+    Examples
+    --------
+    >>> s = companding_schedule(8, v_full=15.0, ratio=0.5, n_phases=2)
+    >>> s.starts, s.biases, s.v_th
+    ((0, 4), (2.5, 1.25), 15.625)
+    >>> s.levels().tolist()  # steps of 2.5 above 5, of 1.25 below
+    [14.375, 11.875, 9.375, 6.875, 5.0, 3.75, 2.5, 1.25]
+    """
+    _check(n_steps, v_full)
+    n_phases = max(1, min(n_phases, n_steps))
+    starts = tuple(int(s) for s in np.linspace(0, n_steps, n_phases + 1)[:-1].round())
+    lengths = np.diff([*starts, n_steps])
+    weights = ratio ** np.arange(n_phases)
+    b0 = v_full / float(np.dot(lengths, weights))
+    return ChargingSchedule(n_steps, starts, tuple(dyadic_ceil(b0 * w) for w in weights))
+
+
+def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
+                    mode: str = "auto", min_gain: float = 0.02
+                    ) -> tuple[ChargingSchedule, dict[str, float]]:
+    """Pick the charging schedule with the lowest MSE on calibration membrane values.
+
+    Parameters
+    ----------
+    n_steps : int
+        Charging window.
+    v_full : float
+        Full-scale membrane value.
+    samples : ndarray, optional
+        Non-negative membrane values from the calibration set (None: constant).
+    mode : {"auto", "constant", "companding"}
+        ``auto`` keeps the constant bias unless a companding schedule lowers the
+        MSE by more than ``min_gain`` (relative); ``companding`` takes the best
+        companding candidate.
+    min_gain : float
+        Relative improvement required in ``auto``.
+
+    Returns
+    -------
+    schedule : ChargingSchedule
+    mse : dict
+        MSE per candidate (``constant``, ``companding-<ratio>``).
+
+    Examples
+    --------
+    Mostly small values: companding wins.
+
+    >>> v = np.r_[np.full(90, 1.3), np.linspace(0, 100, 10)]
+    >>> choose_schedule(16, 100.0, v)[0].kind
+    'companding'
+    >>> choose_schedule(16, 100.0, v, mode="constant")[0].kind
+    'constant'
+    """
+    if mode not in ("auto", "constant", "companding"):
+        raise CompileError(f"charging={mode!r} is not a schedule; use 'auto', 'constant' or "
+                           "'companding'")
+    candidates = {"constant": constant_schedule(n_steps, v_full)}
+    if mode != "constant" and samples is not None and n_steps >= 4:
+        for r in COMPANDING_RATIOS:
+            candidates[f"companding-{r}"] = companding_schedule(n_steps, v_full, r)
+    if samples is None:
+        return candidates["constant"], {}
+    errors = {name: s.mse(samples) for name, s in candidates.items()}
+    best = min((n for n in errors if n != "constant"), key=errors.get, default="constant")
+    if mode == "constant" or (mode == "auto"
+                              and errors[best] >= (1 - min_gain) * errors["constant"]):
+        best = "constant"
+    return candidates[best], errors

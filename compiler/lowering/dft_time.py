@@ -1,0 +1,258 @@
+r"""The time-coded S-FT motif (``time``, default for ``dft``): one spike per neuron, two stages.
+
+A *time-linear code* carries non-negative part values ``z`` by one spike each:
+``z = s·(E − t)`` for a spike at step ``t < E`` (no spike: ``z = 0``), with the
+code's *end* ``E`` and *scale* ``s``.  Signed and complex values use ± parts
+(``signed``: ``(x⁺, x⁻)``; ``re_im_signed``: ``(Re⁺, Re⁻, Im⁺, Im⁻)``), so no value
+ever needs an offset.  The encoder of a host value ``x`` uses
+``LatencyCode(t_max=T, x_min=0, x_max=X)``: ``t = T − rint(z·T/X)``, i.e. ``E = T``,
+``s = X/T`` (``X`` from the calibrate pass: ``max_part · headroom``, or 1 for
+``per-input``, whose encoder normalises each slice).
+
+A layer ``y = M x`` (``M`` from :func:`~compiler.lowering.dft_common.real_weights`)
+is one population of non-leaky ramp neurons (``du = dv = 0``, fire-once):
+
+* **silent stage** ``[0, E_in)``: input on, spiking off; with integer weights
+  ``Q ≈ M/q`` (:mod:`compiler.quantize_weights`) the membrane ends at
+  ``V = Σ Q (E_in − t) = (M ẑ)/(q s_in)`` — exact integer arithmetic;
+* **charging stage** ``[E_in, E_in + T)``: input off, the bias schedule of
+  :mod:`compiler.lowering.charging` (constant or companding), threshold
+  ``v_th = B(T) + b_T/2``; a spike decodes to the middle of its membrane
+  interval, so each output part is within ``q s_in b/2`` of ``relu(±(M ẑ))``.
+
+With the constant schedule the output is again time-linear (``E = E_in + T``,
+``s = q s_in b``): the next S-FT (the Doppler DFT after the range DFT) reads the
+spikes directly, integrating until ``E`` — no host boundary.  Companding
+outputs decode through a table (``spike_table``) and are used only where the
+value goes to the host.  Weights, biases and thresholds are dyadic, so the
+closed-form and step engines agree exactly.
+
+Examples
+--------
+>>> from compiler.lowering import LoweringRegistry
+>>> from ir.ops import DFT
+>>> reg = LoweringRegistry()
+>>> register_time(reg)
+>>> reg.default_motif(DFT), reg.motifs(DFT)
+('time', ['host', 'time'])
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from compiler.calibration import NodeCalibration
+from compiler.lowering.charging import choose_schedule
+from compiler.lowering.context import LoweringContext
+from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
+from compiler.lowering.registry import HOST, LoweringRegistry
+from compiler.lowering.values import SpikeValue, Value
+from compiler.quantize_weights import quantize, weight_bits_of
+from compiler.snn import (
+    N_PARTS,
+    PART_AXIS,
+    Decoder,
+    Encoder,
+    LatencyCode,
+    NeuronParams,
+    Phase,
+    Population,
+    Split,
+)
+from ir.errors import CompileError
+from ir.ops import DFT, Linear, Op, Window
+
+__all__ = ["DEFAULT_TIME_STEPS", "TimeCode", "LayerInput", "calibration_of", "headroom_of",
+           "time_source", "time_layer", "register_time"]
+
+#: Charging (and encoding) window ``T`` when the ``time_steps`` option is not given.
+DEFAULT_TIME_STEPS = 256
+_KIND = "time-linear"
+
+
+@dataclass(frozen=True)
+class TimeCode:
+    """A time-linear code: part value ``scale·(end − t)`` for a spike at ``t``.
+
+    Examples
+    --------
+    >>> TimeCode(end=8, scale=0.5, split="signed").as_code()
+    {'kind': 'time-linear', 'end': 8, 'scale': 0.5, 'split': 'signed'}
+    """
+
+    end: int
+    scale: float
+    split: Split
+
+    def as_code(self) -> dict:
+        """The JSON-able ``SpikeValue.code``."""
+        return {"kind": _KIND, "end": self.end, "scale": self.scale, "split": self.split}
+
+
+@dataclass(frozen=True)
+class LayerInput:
+    """One projection into a time layer: ``source`` population, real matrix, axes."""
+
+    source: str
+    matrix: np.ndarray
+    contract: tuple[str, ...]
+    produce: tuple[str, ...]
+
+
+def _steps(ctx: LoweringContext) -> int:
+    t = int(ctx.option("time_steps", DEFAULT_TIME_STEPS))
+    if t < 2:
+        raise CompileError(f"time_steps={t} is too short for a time code; use >= 2 (256 typical)")
+    return t
+
+
+def calibration_of(ctx: LoweringContext, node: str, consumer: str) -> NodeCalibration:
+    """The calibrate pass's record of ``node`` (raises a clear error without one)."""
+    rec = ctx.calibration.get(node)
+    if rec is None:
+        raise CompileError(f"node {consumer!r}: time-coded motifs need the range of {node!r}, "
+                           "which was not calibrated; run the 'calibrate' pass before 'lower' "
+                           "and give calibration_inputs={input: array} or "
+                           "input_bounds={input: max |value|} (or calibration='per-input')",
+                           node=consumer)
+    return rec
+
+
+def headroom_of(ctx: LoweringContext) -> float:
+    """The calibration headroom (option ``headroom``, default 1)."""
+    return float(ctx.option("headroom", 1.0))
+
+
+def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str
+                ) -> tuple[str, TimeCode]:
+    """A population carrying ``value`` in a time-linear code, and that code.
+
+    Spikes of a time-linear value in the open network are read directly;
+    anything else is encoded from the host (a visible boundary) with the
+    calibrated range, split into ± parts.
+    """
+    if (isinstance(value, SpikeValue) and value.code.get("kind") == _KIND
+            and value.network == ctx.network_index):
+        c = value.code
+        return value.population, TimeCode(int(c["end"]), float(c["scale"]), c["split"])
+    host = ctx.to_host(value)
+    rec = calibration_of(ctx, host.node, consumer)
+    t = _steps(ctx)
+    full = rec.max_part * headroom_of(ctx) or 1.0
+    split: Split = "re_im_signed" if host.type.complex else "signed"
+    builder = ctx.builder()
+    if builder.has_encoder(host.node):
+        raise CompileError(f"node {consumer!r}: value {host.node!r} is already encoded in this "
+                           "network by another consumer; give it one motif", node=consumer)
+    shape = {**host.type.axes, PART_AXIS: N_PARTS[split]}
+    pop = builder.population(consumer, "in", shape, motif=motif, source=True)
+    builder.encoder(Encoder(port=host.node, population=pop.id, split=split, node=host.node,
+                            code=LatencyCode(t_min=0, t_max=t, x_min=0.0, x_max=full),
+                            normalize_axes=rec.normalize_axes))
+    builder.meta["calibration"] = ctx.option("calibration", "static")
+    return pop.id, TimeCode(end=t, scale=full / t, split=split)
+
+
+def _allow_companding(ctx: LoweringContext, node: str) -> bool:
+    """Companding only where every consumer takes the value on the host."""
+    return all(ctx.motif_for(c) == HOST for c in ctx.graph.consumers_of(node))
+
+
+def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[LayerInput], *,
+               shape: dict[str, int], split: Split, full_scale: float,
+               samples: tuple[float, ...] = (), motif: str = "time") -> SpikeValue:
+    """Add one two-stage ramp layer reading ``inputs`` (all in ``code_in``); see the module doc.
+
+    Parameters
+    ----------
+    ctx : LoweringContext
+    node : str
+        IR node whose value the layer carries.
+    code_in : TimeCode
+        The code of every input population.
+    inputs : list of LayerInput
+        Real matrices in value units (quantized together to one scale).
+    shape, split : dict, str
+        Output population shape and its part split (``none``/``signed``/``re_im_signed``).
+    full_scale : float
+        Largest part value to represent (value units).
+    samples : tuple of float
+        Calibration part values (value units) to choose the charging schedule on.
+    motif : str
+        Motif name for provenance.
+
+    Returns
+    -------
+    SpikeValue
+        Time-linear code for the constant schedule, ``time-table`` for companding.
+    """
+    t = _steps(ctx)
+    bits = weight_bits_of(ctx.option("weight_bits"), node=node)
+    levels, q = quantize(np.concatenate([i.matrix.ravel() for i in inputs]), bits)
+    unit = q * code_in.scale
+    mode = ctx.option("charging", "auto")
+    if mode != "constant" and not _allow_companding(ctx, node):
+        mode = "constant"
+    sched, errors = choose_schedule(t, (full_scale or 1.0) / unit,
+                                    np.asarray(samples) / unit if samples else None, mode=mode)
+    e_in, e_out = code_in.end, code_in.end + t
+    phases = (Phase(start_step=0, spiking_on=False),
+              *(Phase(start_step=e_in + s, bias=b, input_on=False)
+                for s, b in zip(sched.starts, sched.biases, strict=True)),
+              Phase(start_step=e_out, input_on=False, spiking_on=False))
+    params = NeuronParams(du=0.0, dv=0.0, v_th=sched.v_th, reset="fire_once", phases=phases)
+    builder = ctx.builder()
+    pop: Population = builder.population(node, "out", shape, params, motif=motif)
+    offset = 0
+    for i, inp in enumerate(inputs):
+        w = levels[offset:offset + inp.matrix.size].reshape(inp.matrix.shape)
+        offset += inp.matrix.size
+        builder.matrix(node, f"w{i}", inp.source, pop.id, contract=inp.contract,
+                       produce=inp.produce, motif=motif, weights=w)
+    charging = {**sched.describe(), "mse": errors, "weight_bits": bits}
+    builder.meta.setdefault("charging", {})[node] = charging
+    if sched.kind == "constant":
+        b = sched.biases[0]
+        dec = Decoder(port=node, population=pop.id, kind="spike_time", scale=unit * b,
+                      t_ref=float(e_out), missing=0.0, combine=split, node=node)
+        code = TimeCode(end=e_out, scale=unit * b, split=split).as_code()
+    else:
+        dec = Decoder(port=node, population=pop.id, kind="spike_table", scale=unit,
+                      table=tuple(float(v) for v in sched.levels()), t_ref=float(e_in),
+                      missing=0.0, combine=split, node=node)
+        code = {"kind": "time-table", "end": e_out, "split": split}
+    return ctx.spike_value(node, pop, dec, (e_in, e_out), **code, charging=charging)
+
+
+def _out_split(complex_out: bool) -> Split:
+    return "re_im_signed" if complex_out else "signed"
+
+
+def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> Value:
+    """Rule of motif ``time`` for ``dft``, ``linear`` and ``window`` nodes."""
+    (x,) = inputs
+    in_type = ctx.types[ctx.graph.inputs_of(node)[0]]
+    axes = dft_axes(node, op, in_type)
+    out_type = ctx.types[node]
+    source, code_in = time_source(ctx, node, x, motif="time")
+    split = _out_split(out_type.complex)
+    w = op_weights(op, axes.n_in, node=node)
+    m = real_weights(w, code_in.split, split)
+    rec = calibration_of(ctx, node, node)
+    layer_in = LayerInput(source, m, axes.contract(code_in.split), axes.produce(split))
+    return time_layer(ctx, node, code_in, [layer_in], shape=axes.out_shape(out_type, split),
+                      split=split, full_scale=rec.max_part * headroom_of(ctx),
+                      samples=tuple(rec.part_quantiles))
+
+
+def register_time(registry: LoweringRegistry) -> None:
+    """Register the time-coded family: ``time`` for ``dft`` (default), ``linear``, ``window``;
+    ``l1`` and ``amb`` (α-max-β-min) for ``magnitude``."""
+    from compiler.lowering.magnitude import register_magnitude
+
+    registry.register(DFT, "time", lower_time_linear, default=True)
+    registry.register(Linear, "time", lower_time_linear)
+    registry.register(Window, "time", lower_time_linear)
+    register_magnitude(registry)
