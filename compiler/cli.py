@@ -1,4 +1,4 @@
-"""The ``radarsnn`` command line: ``validate``, ``schema``, ``demo``, ``run``.
+"""The ``radarsnn`` command line: ``validate``, ``schema``, ``demo``, ``report``, ``run``.
 
 Each sub-command is one small function; errors from the project's hierarchy
 are printed as one line (``error: …``) with exit status 2, never a traceback.
@@ -62,6 +62,52 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _load_arrays(items: list[str], ports: list[str], what: str) -> dict:
+    """``[PORT=]FILE.npy`` arguments → arrays by port (a bare file needs exactly one port)."""
+    import numpy as np
+
+    arrays = {}
+    for item in items:
+        port, sep, path = item.rpartition("=")
+        if not sep:
+            if len(ports) != 1:
+                raise RadarSNNError(f"{what} has input ports {ports}; name one as PORT=FILE.npy "
+                                    f"(got {item!r})")
+            port, path = ports[0], item
+        try:
+            arrays[port] = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as err:
+            raise RadarSNNError(f"cannot read input {path!r} for port {port!r}: {err}") from None
+    return arrays
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from compiler.calibration import synthetic_inputs
+    from compiler.compile import compile_graph
+    from ir import Graph
+
+    graph = Graph.from_yaml(args.chain)
+    if args.calibration:
+        calibration = _load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}")
+        note = "calibrated on the given inputs"
+    else:
+        calibration = synthetic_inputs(graph, seed=0)
+        note = ("calibrated on synthetic noise (resources are exact; pass --calibration for "
+                "thresholds that mean something on radar data)")
+    motifs = dict(m.split("=", 1) for m in args.motif or [])
+    program = compile_graph(graph, target=args.target, motifs=motifs,
+                            calibration_inputs=calibration, time_steps=args.time_steps)
+    report = program.records["report"]
+    if args.core_map:
+        report.save_core_map(args.core_map)
+    if args.format == "json":
+        print(report.to_json())
+    else:
+        print(report.to_markdown())
+        print(f"\n_{note}._")
+    return 0
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -69,19 +115,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from backends.reference import simulate
 
     network = load(args.artifact)
-    inputs = {}
-    ports = [e.port for e in network.encoders]
-    for item in args.input:
-        port, sep, path = item.rpartition("=")
-        if not sep:
-            if len(ports) != 1:
-                raise RadarSNNError(f"artifact {args.artifact} has input ports {ports}; name one "
-                                    f"as PORT=FILE.npy (got {item!r})")
-            port, path = ports[0], item
-        try:
-            inputs[port] = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as err:
-            raise RadarSNNError(f"cannot read input {path!r} for port {port!r}: {err}") from None
+    inputs = _load_arrays(args.input, [e.port for e in network.encoders],
+                          f"artifact {args.artifact}")
     result = simulate(network, inputs, mode=args.mode)
     if args.output:
         np.savez(args.output, **result.outputs)
@@ -119,6 +154,19 @@ def build_parser() -> argparse.ArgumentParser:
                    help="radar preset(s) to run (default: both)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=_cmd_demo)
+
+    p = sub.add_parser("report", help="compile a chain for a target and print what it costs")
+    p.add_argument("chain", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("--target", "-t", default="loihi2",
+                   help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file")
+    p.add_argument("--format", choices=["md", "json"], default="md")
+    p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
+                   help="calibration input per input node (default: synthetic noise)")
+    p.add_argument("--motif", "-m", action="append", metavar="NODE_OR_OP=MOTIF",
+                   help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
+    p.add_argument("--time-steps", type=int, help="override the per-motif time window")
+    p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
+    p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("run", help="simulate a saved artifact on .npy inputs")
     p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")

@@ -3,7 +3,10 @@
 The pipeline is a list of passes (see :mod:`compiler.passes`) run in order on
 an explicit :class:`~compiler.passes.CompileContext`:
 
-``verify`` → ``lower`` (each node into its chosen motif or a host segment).
+``verify`` → ``fuse-linear`` (windows folded into DFT weights) → ``calibrate``
+(value ranges → encoder ranges and thresholds) → ``lower`` (each node into
+its chosen motif or a host segment) and, for a hardware target, ``quantize``
+→ ``split`` → ``place`` → ``report``.
 
 Examples
 --------
@@ -12,8 +15,8 @@ Examples
 ...     {"id": "a", "op": "input", "shape": {"range": 4}},
 ...     {"id": "o", "op": "output", "input": "a"}]})
 >>> program = compile_graph(g)
->>> [s.kind for s in program.segments]
-['host']
+>>> [s.kind for s in program.segments], sorted(program.records["timings"])
+(['host'], ['calibrate', 'fuse-linear', 'lower', 'verify'])
 """
 
 from __future__ import annotations
@@ -24,19 +27,47 @@ from typing import Any
 
 import numpy as np
 
+from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
 from compiler.passes import CompileContext, Pass, Verify, run_pipeline
 from compiler.passes.base import Progress
+from compiler.passes.calibrate import Calibrate
+from compiler.passes.fuse_linear import FuseLinear
 from compiler.passes.lower import Lower
+from compiler.passes.place import Place
+from compiler.passes.quantize import Quantize
+from compiler.passes.report import ReportPass
+from compiler.passes.split import Split
 from compiler.program import CompiledProgram
 from ir import Graph
+from ir.errors import CompileError
 
 __all__ = ["compile_graph", "default_pipeline"]
 
 
-def default_pipeline(options: Mapping[str, Any]) -> list[Pass]:
-    """The passes ``compile_graph`` runs, in order, for the given options."""
-    return [Verify(), Lower()]
+#: Options ``compile_graph`` accepts in ``options=`` besides its named arguments.
+EXTRA_OPTIONS = {
+    "headroom": "calibration headroom factor >= 1 (static policy)",
+    "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
+    "charging": "S-FT charging schedule: auto | constant | companding",
+    "fft_radices": "radix sequence of the time-fft motif",
+    "input_range": "assumed max |input| of rate/fft motifs without calibration",
+    "cfar_range": "{cfar node id: (lo, hi)} value range of the CFAR latency code",
+    "cfar_quantiles": "quantiles of the calibration map that bound the CFAR code",
+    "cfar_ties": "how the CFAR code resolves equal spike steps",
+    "long_delays": "quantize: 'error' or 'relay' for delays beyond the target's maximum",
+    "frame_rate_hz": "report: frames per second (default from the chain or 10)",
+    "real_bits": "report: bits per real sample of frame I/O (default 16)",
+    "n_angle_bins": "report: angle bins of the RA map (default 256)",
+}
+
+
+def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
+    """The passes ``compile_graph`` runs, in order (the allocation passes need a target)."""
+    passes: list[Pass] = [Verify(), FuseLinear(), Calibrate(), Lower()]
+    if hardware:
+        passes += [Quantize(), Split(), Place(), ReportPass()]
+    return passes
 
 
 def compile_graph(graph: Graph | str | Path, target: Any = None, *,
@@ -44,15 +75,18 @@ def compile_graph(graph: Graph | str | Path, target: Any = None, *,
                   calibration_inputs: Mapping[str, np.ndarray] | None = None,
                   time_steps: int | None = None, weight_bits: int | None = None,
                   registry: LoweringRegistry | None = None,
-                  progress: Progress | None = None) -> CompiledProgram:
+                  progress: Progress | None = None,
+                  options: Mapping[str, Any] | None = None) -> CompiledProgram:
     """Compile a radar chain into spiking and host segments.
 
     Parameters
     ----------
     graph : Graph or path
         The chain (a path is read with :meth:`ir.Graph.from_yaml`).
-    target : object, optional
-        The hardware profile (None: unbounded).
+    target : str, Path, HardwareProfile or None
+        A built-in profile name (``loihi``, ``loihi2``, ``spinnaker2``,
+        ``unbounded``), a YAML profile path, a profile object, or None (no
+        allocation passes).
     motifs : mapping, optional
         Motif per node id or op name (e.g. ``{"dft": "time", "mag": "host"}``).
     calibration : {"static", "per-input"}
@@ -67,19 +101,34 @@ def compile_graph(graph: Graph | str | Path, target: Any = None, *,
         Lowering rules (default :func:`compiler.lowering.default_registry`).
     progress : callable, optional
         ``progress(pass_name, message)`` on long work.
+    options : mapping, optional
+        Motif-specific options, see :data:`EXTRA_OPTIONS`.
 
     Returns
     -------
     CompiledProgram
+
+    Raises
+    ------
+    IRError
+        The graph does not verify (naming the node).
+    CompileError
+        An option or motif cannot be honoured (naming the node and the fix).
+    BudgetError
+        The program does not fit the target (naming the node, budget and amount).
     """
     if isinstance(graph, (str, Path)):
         graph = Graph.from_yaml(Path(graph))
-    options = {"motifs": dict(motifs or {}), "calibration": calibration,
+    unknown = sorted(set(options or {}) - set(EXTRA_OPTIONS))
+    if unknown:
+        raise CompileError(f"unknown compile options {unknown}; known: {sorted(EXTRA_OPTIONS)}")
+    profile = None if target is None else load_profile(target)
+    options = {**dict(options or {}), "motifs": dict(motifs or {}), "calibration": calibration,
                "time_steps": time_steps, "weight_bits": weight_bits}
-    ctx = CompileContext(target=target, options=options,
+    ctx = CompileContext(target=profile, options=options,
                          calibration_inputs=dict(calibration_inputs or {}),
                          lowering=registry or default_registry())
     if progress is not None:
         ctx.progress = progress
-    program = CompiledProgram(graph=graph, options=options, target=target)
-    return run_pipeline(default_pipeline(options), ctx, program)
+    program = CompiledProgram(graph=graph, options=options, target=profile)
+    return run_pipeline(default_pipeline(options, hardware=profile is not None), ctx, program)

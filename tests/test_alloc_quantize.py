@@ -62,9 +62,18 @@ def test_unbounded_changes_nothing():
     assert q.projection["w"].weights.tolist() == [[0.3]] and rec.projections == {}
 
 
-def test_threshold_beyond_its_bits_names_the_node():
-    with pytest.raises(BudgetError, match=r"node 'n' \(motif m.*threshold 127000000.*17 "
-                       r"threshold bits of loihi"):
+def test_threshold_beyond_its_bits_coarsens_the_weights():
+    # v_th = 1e4 at weight 1: 17 bits hold 65 535, so the scale grows from 1/127 to 1e4/65535.5
+    net, rec = quantize(small(np.array([[1.0]]), v_th=1e4), load_profile("loihi"))
+    info = rec.populations[net.populations[1].id]
+    assert info["weights_coarsened_for_threshold"]
+    assert net.populations[1].params.v_th <= 65535
+    assert net.projections[0].weights[0, 0] == 7.0  # rint(1 / (1e4 / 65535.5)) = rint(6.55)
+
+
+def test_threshold_that_leaves_no_weight_names_the_node():
+    with pytest.raises(BudgetError, match=r"node 'n' \(motif m.*17 threshold bits of loihi.*"
+                       r"rounds to zero"):
         quantize(small(np.array([[1.0]]), v_th=1e6), load_profile("loihi"))
 
 

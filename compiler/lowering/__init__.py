@@ -11,7 +11,11 @@ Examples
 """
 
 from compiler.lowering.builder import NetworkBuilder
+from compiler.lowering.cfar import register_cfar
 from compiler.lowering.context import LoweringContext, lower_graph
+from compiler.lowering.dft_fft import register_fft
+from compiler.lowering.dft_rate import register_rate
+from compiler.lowering.dft_time import register_time
 from compiler.lowering.inputs import register_io
 from compiler.lowering.registry import HOST, LoweringRegistry, LoweringRule
 from compiler.lowering.values import HostValue, SpikeValue, Value
@@ -34,4 +38,8 @@ def default_registry() -> LoweringRegistry:
     """The registry of every lowering rule radarsnn ships."""
     registry = LoweringRegistry()
     register_io(registry)
+    register_cfar(registry)
+    register_rate(registry)
+    register_fft(registry)
+    register_time(registry)
     return registry

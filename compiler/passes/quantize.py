@@ -11,7 +11,9 @@ network keeps its meaning in integer units (the simulator's ``int64`` arithmetic
 runs it); the record states, per projection, the largest and mean absolute
 error :math:`|w' s_T - w|` (and relative to :math:`\max|w|`) and how many weights
 rounded to zero, and per population the threshold error.  A threshold, bias or
-reset that needs more than ``threshold_bits`` raises :class:`~ir.errors.BudgetError`.
+reset that would need more than ``threshold_bits`` coarsens the population's scale
+(its weights get fewer levels; ``weights_coarsened_for_threshold`` in the record);
+one that still cannot fit raises :class:`~ir.errors.BudgetError`.
 
 Delays beyond ``D = 2**delay_bits - 1`` steps either raise ``BudgetError``
 (``long_delays="error"``) or go through **relay chains** (``"relay"``): a relay
@@ -97,6 +99,20 @@ def _fit(pop: Population, what: str, value: float, limit: int, profile) -> None:
             "with wider thresholds", node=pop.origin.get("node", pop.id))
 
 
+def _state_scale(par: NeuronParams, profile) -> float:
+    """The smallest scale at which threshold, reset and biases fit ``threshold_bits``.
+
+    When the weights' own scale is finer than this, the weights are coarsened
+    (fewer effective weight levels) rather than the compilation refused; the
+    record says so and the rounding errors show the cost.
+    """
+    if not profile.threshold_bits:
+        return 0.0
+    limit = (1 << (profile.threshold_bits - 1)) - 1
+    peak = max([abs(par.v_th), abs(par.v_reset), *(abs(ph.bias) for ph in par.phases)])
+    return peak / (limit - 0.5)
+
+
 def _quantize_params(pop: Population, scale: float, profile) -> tuple[NeuronParams, dict]:
     par = pop.params
     limit = (1 << (profile.threshold_bits - 1)) - 1
@@ -153,8 +169,12 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
             continue
         peak = max((float(np.abs(_weights(p)).max(initial=0.0)) for p in incoming), default=0.0)
         scale = peak / w_max if peak > 0 else 1.0
+        state_scale = _state_scale(pop.params, profile)
+        coarsened = state_scale > scale
+        scale = max(scale, state_scale)  # thresholds and biases must fit their bits too
         params, info = _quantize_params(pop, scale, profile) if profile.threshold_bits else (
             pop.params, {"scale": scale})
+        info["weights_coarsened_for_threshold"] = coarsened
         record.populations[pop.id] = info
         new_pops.append(pop.model_copy(update={"params": params}))
         for p in incoming:
@@ -168,6 +188,13 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
                 "mean_abs_error": float(err.mean()) if err.size else 0.0,
                 "max_rel_error": float(err.max(initial=0.0) / own) if own else 0.0,
                 "rounded_to_zero": int((live & (q == 0)).sum())}
+            if live.any() and not q[live].any():
+                raise BudgetError(
+                    f"{describe(pop)}: fitting its threshold/bias ({pop.params.v_th:.4g}) into "
+                    f"the {profile.threshold_bits} threshold bits of {profile.name} needs a "
+                    f"scale of {scale:.4g}, at which every weight of projection {p.id!r} "
+                    f"(max {own:.4g}) rounds to zero; use fewer time steps or a target with "
+                    "wider thresholds", node=pop.origin.get("node", pop.id))
             new_projs[p.id] = _with_weights(p, q)
     out = replace(net, populations=new_pops,
                   projections=[new_projs.get(p.id, p) for p in net.projections])
