@@ -96,7 +96,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
                 "thresholds that mean something on radar data)")
     motifs = dict(m.split("=", 1) for m in args.motif or [])
     program = compile_graph(graph, target=args.target, motifs=motifs,
-                            calibration_inputs=calibration, time_steps=args.time_steps)
+                            calibration_inputs=calibration, time_steps=args.time_steps,
+                            options={"repetitions": args.repetitions})
     report = program.records["report"]
     if args.core_map:
         report.save_core_map(args.core_map)
@@ -166,6 +167,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
     p.add_argument("--time-steps", type=int, help="override the per-motif time window")
     p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
+    p.add_argument("--repetitions", choices=["auto", "spatial", "temporal"], default="auto",
+                   help="repeated stages: unrolled (spatial), one instance run R times per "
+                        "frame (temporal), or spatial where it fits (auto, default)")
     p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("run", help="simulate a saved artifact on .npy inputs")

@@ -56,6 +56,7 @@ EXTRA_OPTIONS = {
     "cfar_quantiles": "quantiles of the calibration map that bound the CFAR code",
     "cfar_ties": "how the CFAR code resolves equal spike steps",
     "long_delays": "quantize: 'error' or 'relay' for delays beyond the target's maximum",
+    "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
     "frame_rate_hz": "report: frames per second (default from the chain or 10)",
     "real_bits": "report: bits per real sample of frame I/O (default 16)",
     "n_angle_bins": "report: angle bins of the RA map (default 256)",

@@ -50,7 +50,7 @@ def test_hand_worked_placement_and_traffic():
     # 4 a-neurons from other cores (8 messages), 2 of them from the other chip (4 in all);
     # one spike per neuron (fire-once)
     assert pl.traffic == {"host_input": 4.0, "inter_core": 8.0, "inter_chip": 4.0,
-                          "not_counted": [], "basis": "bound"}
+                          "buffered": 0.0, "not_counted": [], "basis": "bound"}
     # a -> b fan-out: each a neuron drives one target population: 2 lines per a-block
     assert pl.usage[:, 2].tolist() == [2, 0, 0, 2]
     assert pl.usage[:, 1].tolist() == [2, 4, 4, 2]

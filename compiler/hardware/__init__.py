@@ -2,7 +2,8 @@
 
 :mod:`~compiler.hardware.profile` holds :class:`HardwareProfile` and the
 built-in YAML profiles; :mod:`~compiler.hardware.demand` counts what a block of
-neurons needs from a core (neurons, fan-in and fan-out lines, synaptic memory).
+neurons needs from a core (neurons, fan-in and fan-out lines, synaptic memory);
+:mod:`~compiler.hardware.repetition` finds the stages that can be time-multiplexed.
 See ``docs/hardware.md``.
 """
 

@@ -61,20 +61,49 @@ _MARK_LIMIT = 1 << 25     # booleans in one (blocks x source neurons) mark matri
 class Blocks:
     """Contiguous blocks of one population: block ``i`` holds neurons ``edges[i] … edges[i+1]-1``.
 
+    With ``neurons`` (ascending flat indices, e.g. one instance of a time-multiplexed
+    stage) the blocks cut that list instead: block ``i`` holds
+    ``neurons[edges[i]:edges[i+1]]`` and the other neurons are in no block.
+
     Examples
     --------
     >>> b = Blocks.uniform("y", 10, 3)
     >>> b.edges.tolist(), b.sizes.tolist(), b.block_of(np.array([0, 4, 9])).tolist()
     ([0, 3, 6, 10], [3, 3, 4], [0, 1, 2])
+    >>> i = Blocks.uniform("y", 4, 2, neurons=np.array([0, 1, 6, 7]))
+    >>> i.block_of_neuron(np.array([1, 6, 3])).tolist(), i.flat(np.array([2, 3])).tolist()
+    ([0, 1, -1], [6, 7])
     """
 
     population: str
     edges: np.ndarray
+    neurons: np.ndarray | None = None
 
     @classmethod
-    def uniform(cls, population: str, size: int, n_blocks: int) -> Blocks:
-        """``n_blocks`` blocks whose sizes differ by at most one: ``edges[i] = floor(i·size/n)``."""
-        return cls(population, (np.arange(n_blocks + 1, dtype=np.int64) * size) // n_blocks)
+    def uniform(cls, population: str, size: int, n_blocks: int, *,
+                neurons: np.ndarray | None = None) -> Blocks:
+        """``n_blocks`` blocks whose sizes differ by at most one: ``edges[i] = floor(i·size/n)``.
+
+        ``size`` is ``len(neurons)`` when ``neurons`` is given.
+        """
+        return cls(population, (np.arange(n_blocks + 1, dtype=np.int64) * size) // n_blocks,
+                   neurons)
+
+    @property
+    def n_neurons(self) -> int:
+        """Neurons covered by the blocks."""
+        return int(self.edges[-1])
+
+    def flat(self, positions: np.ndarray) -> np.ndarray:
+        """The flat neuron index of each position ``0 … n_neurons-1`` in block order."""
+        return positions if self.neurons is None else self.neurons[positions]
+
+    def block_of_neuron(self, flat: np.ndarray) -> np.ndarray:
+        """The block of each flat neuron index; ``-1`` for a neuron in no block."""
+        if self.neurons is None:
+            return self.block_of(flat)
+        pos = np.minimum(np.searchsorted(self.neurons, flat), len(self.neurons) - 1)
+        return np.where(self.neurons[pos] == flat, self.block_of(pos), -1)
 
     @property
     def n_blocks(self) -> int:
@@ -86,9 +115,9 @@ class Blocks:
         """Neurons per block."""
         return np.diff(self.edges)
 
-    def block_of(self, neurons: np.ndarray) -> np.ndarray:
-        """The block index of each flat neuron index."""
-        return np.searchsorted(self.edges, neurons, side="right") - 1
+    def block_of(self, positions: np.ndarray) -> np.ndarray:
+        """The block index of each position (the flat index when ``neurons`` is ``None``)."""
+        return np.searchsorted(self.edges, positions, side="right") - 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -371,7 +400,8 @@ def block_demand(network: SpikingNetwork, population: str, blocks: Blocks, *,
         if proj.source == population:
             info = projection_info(proj, tgt, pops[proj.target])
             outgoing.setdefault(proj.target, []).append(info)
-    if nb == 1 and not reach:  # one block: closed-form entries, only fan-out needs a sweep
+    if nb == 1 and not reach and blocks.neurons is None:
+        # one block of the whole population: closed-form entries, only fan-out needs a sweep
         return _single_block(network, tgt, blocks, by_source, outgoing, bits_per_synapse,
                              shared_weights)
     pairs: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {s: [] for s in by_source}
@@ -386,8 +416,8 @@ def block_demand(network: SpikingNetwork, population: str, blocks: Blocks, *,
                     if i.proj.kind == "stencil"] + [1])
         step = max(1, _CHUNK // taps)
         for lo in range(int(edges[g0]), int(edges[g1]), step):
-            flat = np.arange(lo, min(lo + step, int(edges[g1])), dtype=np.int64)
-            blk = blocks.block_of(flat)
+            pos = np.arange(lo, min(lo + step, int(edges[g1])), dtype=np.int64)
+            flat, blk = blocks.flat(pos), blocks.block_of(pos)
             for s, projs in by_source.items():
                 mark = None
                 if reach:

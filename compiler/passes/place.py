@@ -16,6 +16,12 @@ synapse onto ``c``): one message per spike and destination core.  Messages from
 spike sources (encoders) are the host input; the others are inter-core, of
 which those crossing chips (``core // cores_per_chip``) are inter-chip.
 
+**Time-multiplexed stages** (see :mod:`compiler.passes.split`): only one
+instance is placed and it runs :math:`R` times per frame, so messages into its
+blocks count :math:`R` times; synapses that cross the boundary of a multiplexed
+stage (into it from anything else, or out of it into a spatial stage) carry
+spikes replayed from the stage's frame buffer, counted as ``buffered``.
+
 Examples
 --------
 >>> import numpy as np
@@ -37,7 +43,15 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from compiler.hardware import BUDGETS, HardwareProfile, load_profile
 from compiler.hardware.activity import measured_spikes, spike_bound
 from compiler.passes.base import CompileContext, Pass
-from compiler.passes.split import SplitRecord, describe, split
+from compiler.passes.split import (
+    SplitRecord,
+    describe,
+    explain_failure,
+    multiplex_candidates,
+    repetition_mode,
+    split,
+    split_program,
+)
 from compiler.program import CompiledProgram
 from compiler.snn import SpikingNetwork
 from ir.errors import BudgetError
@@ -120,9 +134,13 @@ class Placement:
     utilisation : ndarray, shape (n_cores_used, 4)
         ``usage / limits`` (0 for unbounded budgets).
     traffic : dict
-        Messages per frame: ``host_input``, ``inter_core``, ``inter_chip``, ``basis``
-        (``"bound"`` or ``"measured"``) and ``not_counted`` (populations whose fan-in was
-        too large to enumerate without a fan-in budget; their incoming traffic is missing).
+        Messages per frame: ``host_input``, ``inter_core``, ``inter_chip``, ``buffered``
+        (replayed across a multiplexed stage's boundary), ``basis`` (``"bound"`` or
+        ``"measured"``) and ``not_counted`` (populations whose fan-in was too large to
+        enumerate without a fan-in budget; their incoming traffic is missing).
+    multiplexed : list of dict
+        ``network``, ``stage``, ``repetitions`` of each time-multiplexed stage: its items
+        are the blocks of one instance, run ``repetitions`` times per frame.
     """
 
     profile: str
@@ -132,6 +150,7 @@ class Placement:
     usage: np.ndarray
     utilisation: np.ndarray
     traffic: dict = field(default_factory=dict)
+    multiplexed: list[dict] = field(default_factory=list)
 
     @property
     def n_cores(self) -> int:
@@ -153,7 +172,7 @@ class Placement:
         return {"profile": self.profile, "cores": self.n_cores, "chips": self.n_chips,
                 "max_utilisation": dict(zip(BUDGETS, self.utilisation.max(axis=0, initial=0)
                                             .round(4).tolist(), strict=True)),
-                "traffic": self.traffic}
+                "traffic": self.traffic, "multiplexed": self.multiplexed}
 
 
 def _affinity(splits, offsets) -> sp.csr_matrix:
@@ -161,10 +180,10 @@ def _affinity(splits, offsets) -> sp.csr_matrix:
     for k, rec in enumerate(splits):
         for tgt, dem in rec.demand.items():
             for src, (blk, neuron) in dem.reach.items():
-                if src not in rec.demand:
+                if not rec.on_chip(src, tgt):
                     continue
                 rows.append(offsets[k][tgt] + blk)
-                cols.append(offsets[k][src] + rec.demand[src].blocks.block_of(neuron))
+                cols.append(offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron))
     n = max((o[p] + d.blocks.n_blocks for o, r in zip(offsets, splits, strict=True)
              for p, d in r.demand.items()), default=0)
     if not rows:
@@ -178,7 +197,7 @@ def _affinity(splits, offsets) -> sp.csr_matrix:
 
 
 def _traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
-    host = inter = chip_x = 0.0
+    host = inter = chip_x = buffered = 0.0
     for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
         pops = net.population
         for tgt, dem in rec.demand.items():
@@ -186,11 +205,14 @@ def _traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
                 dst = core[offsets[k][tgt] + blk]
                 keys = np.unique(dst * pops[src].size + neuron)
                 dst, neuron = keys // pops[src].size, keys % pops[src].size
-                rate = spikes[k].get(src, 0.0)
+                rate = spikes[k].get(src, 0.0) * rec.runs(tgt)
                 if src not in rec.demand:
                     host += rate * dst.size
                     continue
-                home = core[offsets[k][src] + rec.demand[src].blocks.block_of(neuron)]
+                if not rec.on_chip(src, tgt):
+                    buffered += rate * dst.size
+                    continue
+                home = core[offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron)]
                 away = home != dst
                 inter += rate * int(away.sum())
                 if cores_per_chip:
@@ -200,7 +222,7 @@ def _traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
                       for pid, dem in rec.demand.items()
                       if networks[k].incoming(pid) and not dem.reach})
     return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
-            "not_counted": missing}
+            "buffered": buffered, "not_counted": missing}
 
 
 def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
@@ -273,13 +295,19 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
     traffic = _traffic(networks, splits, offsets, core, cpc, spikes)
     traffic["basis"] = "measured" if sim_results is not None else "bound"
     chip = core // cpc if cpc else np.zeros_like(core)
+    mux = [{"network": rec.network, "stage": key, "repetitions": r}
+           for rec in splits for key, r in rec.multiplexed.items()]
     return Placement(profile=profile.name, items=items, core=core, chip=chip, usage=usage,
-                     utilisation=util, traffic=traffic)
+                     utilisation=util, traffic=traffic, multiplexed=mux)
 
 
 @dataclass(frozen=True)
 class Place(Pass):
     """Place the program's networks (after ``split``); record ``records["placement"]``.
+
+    With ``repetitions="auto"``, blocks that do not pack onto the cores make it
+    multiplex the next candidate stage, split again (``records["split"]`` is
+    replaced) and retry.
 
     Attributes
     ----------
@@ -292,7 +320,21 @@ class Place(Pass):
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)
-        splits = program.records.get("split")
-        program.records["placement"] = place(program.networks, splits, profile,
-                                             placer=self.placer)
+        mode = repetition_mode(ctx.options)
+        networks = program.networks
+        splits = program.records.get("split") or split_program(networks, profile, mode)
+        cands = multiplex_candidates(networks, profile)
+        while True:
+            try:
+                placement = place(networks, splits, profile, placer=self.placer)
+                break
+            except BudgetError as err:
+                n = sum(len(r.multiplexed) for r in splits)
+                if mode != "auto" or n >= len(cands):
+                    raise explain_failure(err, cands[:n], mode, len(cands)) from None
+                # the blocks did not pack: multiplex one more stage and split again
+                ctx.progress(self.name, f"multiplexing {n + 1} stage(s)")
+                splits = split_program(networks, profile, mode, start=n + 1)
+        program.records["split"] = splits
+        program.records["placement"] = placement
         return program

@@ -16,9 +16,33 @@ from compiler.report.opcounts import graph_cfar_op_counts
 from compiler.report.render import Report
 from compiler.report.stages import stage_rows
 
-__all__ = ["Report", "build_report"]
+__all__ = ["Report", "build_report", "network_runs"]
 
 SCHEMA = "radarsnn-report/1"
+
+
+def network_runs(rows: list[dict]) -> int:
+    r"""Runs of a network's time window per frame: :math:`\sum_{s \in M} R_s + [S \ne M]`.
+
+    ``rows`` are the network's stage rows; :math:`M` its multiplexed stages, each
+    run :math:`R_s` times one after the other, and the spatial stages (if any) run
+    once, all of them in one window (a network without stages runs once).
+
+    Examples
+    --------
+    >>> network_runs([{"multiplexed": True, "repetitions": 256},
+    ...               {"multiplexed": False, "repetitions": 1}])
+    257
+    """
+    mux = sum(r["repetitions"] for r in rows if r.get("multiplexed"))
+    return mux + int(not rows or any(not r.get("multiplexed") for r in rows))
+
+
+def _step_note(profile) -> str:
+    if profile.time_step_s is None:
+        return f"{profile.name} gives no time-step duration: no latency in seconds"
+    return (f"time_step_s = {profile.time_step_s:g} s is an assumption of the {profile.name} "
+            "profile, not a published figure (a real step's duration depends on the activity)")
 
 
 def build_report(program, *, sim_results: Sequence | None = None,
@@ -69,10 +93,15 @@ def build_report(program, *, sim_results: Sequence | None = None,
         for p in net.populations:
             if "node" in p.origin:
                 steps[p.origin["node"]] = net.n_steps
-    lat_rows = [{"network": n.name, "time_steps": n.n_steps, "step_s": profile.time_step_s,
-                 "latency_s": n.n_steps * profile.time_step_s if profile.time_step_s else None}
-                for n in networks]
-    total_s = (sum(r["latency_s"] for r in lat_rows) if profile.time_step_s else None)
+    step_s = profile.time_step_s
+    lat_rows = []
+    for n in networks:
+        runs = network_runs([r for r in stages if r["network"] == n.name])
+        lat_rows.append({"network": n.name, "time_steps": n.n_steps, "runs": runs,
+                         "latency_steps": runs * n.n_steps, "step_s": step_s,
+                         "latency_s": runs * n.n_steps * step_s if step_s else None})
+    total_steps = sum(r["latency_steps"] for r in lat_rows)
+    total_s = total_steps * step_s if step_s else None
     cores = []
     if placement is not None:
         stage_of = {(k, p.id): p.origin.get("node", p.id)
@@ -102,8 +131,11 @@ def build_report(program, *, sim_results: Sequence | None = None,
         "frame_io": frame_io(program.graph, frame_rate_hz=rate, real_bits=real_bits,
                              n_angle_bins=n_angle_bins),
         "cfar_ops": graph_cfar_op_counts(program.graph, steps),
-        "latency": {"networks": lat_rows, "total_s": total_s, "frame_period_s": 1.0 / rate,
-                    "fits": None if total_s is None else total_s <= 1.0 / rate},
+        "latency": {"networks": lat_rows, "total_steps": total_steps, "total_s": total_s,
+                    "frame_period_s": 1.0 / rate,
+                    "fits": None if total_s is None else total_s <= 1.0 / rate,
+                    "max_step_s": 1.0 / rate / total_steps if total_steps else None,
+                    "step_note": _step_note(profile)},
         "cores": cores,
         "traffic": dict(placement.traffic) if placement is not None else {},
         "totals": totals,

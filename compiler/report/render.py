@@ -4,12 +4,14 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
 
     chain, target, frame_rate_hz
     stages[]      node, motif, network, inputs, neurons, synapses, time_steps, repetitions,
-                  cores, blocks, synapse_memory_bits, *_total, spikes_bound, ...
+                  multiplexed, steps_per_frame, cores, blocks, synapse_memory_bits, *_total,
+                  spikes_bound, ...
     frame_io[]    name, source, shape, values, bits_per_value, bytes, memory_kB, bandwidth_Mbit_s
     cfar_ops[]    node, n_train, algorithm, add, cmp, total[, n_steps]
-    latency       per network steps, step_s, latency_s; total_s, frame_period_s, fits
+    latency       networks[] (network, time_steps, runs, latency_steps, step_s, latency_s);
+                  total_steps, total_s, frame_period_s, fits, max_step_s, step_note
     cores[]       core, chip, neurons, input_axons, output_axons, synapse_bits, utilisation
-    traffic       host_input, inter_core, inter_chip (messages per frame), basis
+    traffic       host_input, inter_core, inter_chip, buffered (messages per frame), basis
     totals        inputs, neurons, synapses, synapses_stored, cores, chips, synapse_memory_bits
 """
 
@@ -24,7 +26,8 @@ import numpy as np
 __all__ = ["Report"]
 
 _STAGE_COLUMNS = ("node", "motif", "inputs", "neurons", "synapses", "time_steps", "repetitions",
-                  "cores", "synapse_memory_bits", "spikes_bound", "synaptic_events_bound")
+                  "multiplexed", "steps_per_frame", "cores", "synapse_memory_bits",
+                  "spikes_bound", "synaptic_events_bound")
 
 
 def _fmt(v) -> str:
@@ -63,6 +66,10 @@ class Report:
         d = self.data
         lines = [f"# Resource report: {d['chain']} on {d['target']}", ""]
         lines += ["## Stages (per repetition)", ""]
+        if any(r.get("multiplexed") for r in d["stages"]):
+            lines += ["Multiplexed stages are time-multiplexed: one instance is placed (its "
+                      "`cores` and `synapse_memory_bits`) and run `repetitions` times per "
+                      "frame (`steps_per_frame` = repetitions × time_steps).", ""]
         lines += _table(d["stages"], _STAGE_COLUMNS + ("spikes_measured",
                                                        "synaptic_events_measured"))
         lines += ["", f"## Frame I/O at {d['frame_rate_hz']:g} frames/s", ""]
@@ -73,13 +80,19 @@ class Report:
             lines += _table(d["cfar_ops"], ("node", "algorithm", "add", "cmp", "total"))
         lat = d["latency"]
         lines += ["", "## Latency", ""]
-        lines += _table(lat["networks"], ("network", "time_steps", "step_s", "latency_s"))
-        lines += ["", f"Total {_fmt(lat['total_s'])} s per frame against a frame period of "
-                  f"{_fmt(lat['frame_period_s'])} s: fits = {_fmt(lat['fits'])}."]
+        lines += _table(lat["networks"], ("network", "time_steps", "runs", "latency_steps",
+                                          "step_s", "latency_s"))
+        lines += ["", f"Total {_fmt(lat.get('total_steps'))} steps = {_fmt(lat['total_s'])} s "
+                  f"per frame against a frame period of {_fmt(lat['frame_period_s'])} s: "
+                  f"fits = {_fmt(lat['fits'])}"
+                  + (f" (it would fit with steps of at most {_fmt(lat['max_step_s'])} s)"
+                     if lat.get("max_step_s") else "") + "."]
+        if lat.get("step_note"):
+            lines += ["", f"Note: {lat['step_note']}."]
         lines += ["", "## Totals", ""]
         lines += _table([d["totals"]], tuple(d["totals"]))
         lines += ["", f"## Spike traffic per frame ({d['traffic'].get('basis', '')})", ""]
-        lines += _table([d["traffic"]], ("host_input", "inter_core", "inter_chip"))
+        lines += _table([d["traffic"]], ("host_input", "inter_core", "inter_chip", "buffered"))
         if d["cores"]:
             util = np.array([c["utilisation"] for c in d["cores"]])
             lines += ["", f"## Cores: {len(d['cores'])} used", "",

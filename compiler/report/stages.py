@@ -12,6 +12,10 @@ A **stage** is the set of populations whose ``origin["node"]`` is one IR node
   repetition**, i.e. divided by :math:`R`, with the ``*_total`` fields undivided;
 * ``synapse_memory_bits`` what the split stores for it on the target, ``cores``
   the cores its blocks occupy;
+* ``multiplexed`` whether the split time-multiplexes it: then one instance is
+  placed (``cores``, ``blocks`` and ``synapse_memory_bits`` are for that
+  instance) and run ``repetitions`` times per frame of ``time_steps`` steps each
+  (``steps_per_frame`` = :math:`R T`, else :math:`T`);
 * ``spikes`` / ``synaptic_events`` per frame: the bound of
   :func:`compiler.hardware.activity.spike_bound` times the population sizes /
   synapse instances, and the measured means when a simulation is given.
@@ -19,12 +23,12 @@ A **stage** is the set of populations whose ``origin["node"]`` is one IR node
 
 from __future__ import annotations
 
-from math import gcd, prod
-
 import numpy as np
 
 from compiler.hardware.activity import spike_bound
 from compiler.hardware.demand import has_synapse_out, projection_info
+from compiler.hardware.repetition import projection_repetitions as repetitions
+from compiler.hardware.repetition import stages
 from compiler.snn import MatrixProjection, SpikingNetwork
 
 __all__ = ["stage_rows", "nominal_synapses", "repetitions"]
@@ -35,18 +39,6 @@ def nominal_synapses(proj, pops) -> int:
     if isinstance(proj, MatrixProjection):
         return repetitions(proj, pops) * proj.n_synapses
     return pops[proj.target].size * proj.n_taps
-
-
-def repetitions(proj, pops) -> int:
-    """How many times a matrix is applied (``source.size / n_in``); 1 for a stencil."""
-    if isinstance(proj, MatrixProjection):
-        src = pops[proj.source]
-        return src.size // prod(src.shape[a] for a in proj.contract)
-    return 1
-
-
-def _stage_of(pop) -> str:
-    return pop.origin.get("node", pop.id)
 
 
 def _reached(network: SpikingNetwork, source: str, projs: list) -> int:
@@ -92,39 +84,28 @@ def stage_rows(network: SpikingNetwork, *, split=None, placement=None, net_index
     """
     pops = network.population
     bound = spike_bound(network)
-    order = []
-    members: dict[str, list] = {}
-    for p in network.populations:
-        key = _stage_of(p)
-        if key not in members:
-            order.append(key)
-            members[key] = []
-        members[key].append(p)
     rows = []
-    for key in order:
-        neurons = [p for p in members[key] if not p.source]
-        if not neurons:
-            continue
-        ids = {p.id for p in neurons}
+    for stage in stages(network):
+        key, r = stage.key, stage.repetitions
+        neurons = [pops[pid] for pid in stage.populations]
+        ids = set(stage.populations)
         projs = [q for q in network.projections if q.target in ids]
         outside: dict[str, list] = {}
         for q in projs:
             if q.source not in ids:
                 outside.setdefault(q.source, []).append(q)
-        r = 0
-        for q in projs:
-            r = gcd(r, repetitions(q, pops))
-        r = r or 1
         n_in = sum(_reached(network, s, qs) for s, qs in outside.items())
         n_neu = sum(p.size for p in neurons)
         n_syn = sum(nominal_synapses(q, pops) for q in projs)
-        motifs = sorted({p.origin.get("motif", "") for p in neurons} - {""})
+        mux = split is not None and key in split.multiplexed
         row = {
-            "node": key, "motif": "+".join(motifs) or None, "network": network.name,
+            "node": key, "motif": stage.motif, "network": network.name,
             "inputs": n_in // r if n_in % r == 0 else n_in / r,
             "neurons": n_neu // r if n_neu % r == 0 else n_neu / r,
             "synapses": n_syn // r if n_syn % r == 0 else n_syn / r,
             "time_steps": network.n_steps, "repetitions": r,
+            "multiplexed": mux,
+            "steps_per_frame": network.n_steps * (r if mux else 1),
             "inputs_total": n_in, "neurons_total": n_neu, "synapses_total": n_syn,
             "synapses_stored": sum(q.n_synapses for q in projs),
             "spikes_bound": sum(p.size * bound[p.id] for p in neurons),
