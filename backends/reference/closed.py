@@ -238,7 +238,8 @@ def _silent(
             continue
         order = np.argsort(flat, kind="stable")
         flat, arrive = flat[order], arrive[order]
-        total += arr.delivery.current(arr.k, flat, n_frames)
+        # unit weights route the silent stage's bulk delivery through the BLAS path
+        total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
         if params.du == 0.0:
             second += arr.delivery.current(arr.k, flat, n_frames, values=s1 - arrive)
         else:

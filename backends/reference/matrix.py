@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
 
-#: Above ``n_in / 16`` events per target row the one-hot BLAS product beats gathering rows.
+#: Above ``n_in / 16`` weighted events per target row the one-hot BLAS product beats gathering.
 _DENSE_EVENTS_PER_ROW = 16
 
 __all__ = ["MatrixDelivery"]
@@ -165,8 +165,10 @@ class MatrixDelivery:
             starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if rows.size else rows
             hit = rows[starts]
             data = None if values is None else values[order].astype(dtype)
-            if events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
-                # dense enough: a one-hot block and one BLAS product
+            if data is not None and events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
+                # the closed form's weighted features (dense): a one-hot block and one BLAS
+                # product.  Unweighted events (step mode, the driven path) always gather, so
+                # both engines add every row's weights in the same order, bit for bit.
                 local = np.repeat(np.arange(hit.size), np.diff(np.r_[starts, rows.size]))
                 if self.integer:
                     one_hot = np.zeros((hit.size, self.n_in), dtype)
