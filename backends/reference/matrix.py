@@ -68,6 +68,9 @@ class MatrixDelivery:
     block_shape: tuple[int, ...]
     to_target: tuple[int, ...]
     integer: bool
+    #: Let unweighted events take the BLAS path when dense (set by ``build_plan`` for networks
+    #: the closed form cannot run, where no second engine must add in the same order).
+    blas_events: bool = False
 
     @classmethod
     def build(
@@ -165,10 +168,12 @@ class MatrixDelivery:
             starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if rows.size else rows
             hit = rows[starts]
             data = None if values is None else values[order].astype(dtype)
-            if data is not None and events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
-                # the closed form's weighted features (dense): a one-hot block and one BLAS
-                # product.  Unweighted events (step mode, the driven path) always gather, so
-                # both engines add every row's weights in the same order, bit for bit.
+            blas = data is not None or self.blas_events
+            if blas and events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
+                # dense: a one-hot block and one BLAS product.  Only for the closed form's
+                # weighted features, or networks the closed form cannot run: otherwise the
+                # step engine and the closed form's driven path both gather, adding every
+                # row's weights in the same order, bit for bit.
                 local = np.repeat(np.arange(hit.size), np.diff(np.r_[starts, rows.size]))
                 if self.integer:
                     one_hot = np.zeros((hit.size, self.n_in), dtype)

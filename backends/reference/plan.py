@@ -10,7 +10,7 @@ plan can be reused across calls of :func:`~backends.reference.simulate`.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -134,6 +134,10 @@ def build_plan(
                for p in network.populations if not p.source}
     deliveries = {q.id: builders[q.kind](q, pops[q.source], pops[q.target], integer)
                   for q in network.projections}
+    if not all(p.params.reset == "fire_once" for p in network.populations if not p.source):
+        # no closed form for this network: dense steps may use BLAS (rate codes)
+        deliveries = {k: replace(d, blas_events=True) if hasattr(d, "blas_events") else d
+                      for k, d in deliveries.items()}
     history = {p.id: 1 for p in network.populations}
     for d in deliveries.values():
         history[d.source] = max(history[d.source], max(d.delays) + 1)
