@@ -139,3 +139,14 @@ def test_carrada_compiles_for_loihi():
     prog = compile_graph(g, target="loihi", calibration_inputs=synthetic_inputs(g, seed=0))
     assert set(prog.records["timings"]) >= {"lower", "split", "place", "report"}
     assert prog.records["report"].data["totals"]["cores"] <= 128
+    # issue 6 acceptance, computed from the compiled chain's JSON report
+    data = json.loads(prog.records["report"].to_json())
+    det = next(s for s in data["stages"] if s["node"] == "det")
+    assert (det["motif"], det["inputs"], det["neurons"], det["synapses"], det["repetitions"]) == (
+        "time", 16_384, 16_384, 2_899_968, 1)
+    io = {r["name"]: r for r in data["frame_io"]}
+    assert round(io["raw_cube"]["memory_kB"]) == 262
+    assert round(io["rd_map"]["memory_kB"], 1) == 32.8
+    assert round(io["rd_map"]["bandwidth_Mbit_s"], 2) == 2.62
+    assert round(io["ra_map"]["memory_kB"]) == 131
+    assert round(io["ra_map"]["bandwidth_Mbit_s"], 1) == 10.5
