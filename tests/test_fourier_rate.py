@@ -117,11 +117,32 @@ def test_seed003_rmse_reduced_size(seed003_small, two_d, limit):
     assert rmse <= limit
 
 
-def test_short_frames_and_per_input_are_refused():
+def test_short_frames_are_refused():
     with pytest.raises(CompileError, match="time_steps=1"):
         _lower(_graph(4), steps=1)
-    ctx = LoweringContext(graph=_graph(4), registry=default_registry(),
-                          options={"motifs": {"dft": "rate"}},
-                          calibration={"x": {"max_re": 1.0, "normalize_axes": ("sample",)}})
-    with pytest.raises(CompileError, match="calibration='static'"):
-        lower_graph(ctx)
+
+
+@pytest.mark.parametrize("motif", ["rate", "time-fft"])
+def test_per_input_policy_normalises_each_chirp(motif):
+    """``per-input``: the encoder divides each chirp by its largest part at run time, so two
+    chirps 100x apart in scale are transformed with the same relative accuracy; the decoded
+    values are the DFT of the normalised chirps."""
+    from compiler.compile import compile_graph
+    from compiler.lowering.dft_common import sft_rmse
+
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(2, 64)) * np.array([[1.0], [100.0]])
+    g = Graph.from_dict({"name": "pi", "nodes": [
+        {"id": "x", "op": "input", "shape": {"chirp": 2, "sample": 64}},
+        {"id": "f", "op": "dft", "input": "x", "axis": "sample", "out_axis": "bin",
+         "keep": "positive"},
+        {"id": "o", "op": "output", "input": "f"}]})
+    steps = 2000 if motif == "rate" else 256
+    program = compile_graph(g, motifs={"dft": motif}, calibration="per-input",
+                            calibration_inputs={"x": x}, time_steps=steps)
+    (net,) = program.networks
+    assert net.encoders[0].normalize_axes == ("sample",)
+    y = simulate(net, {"x": x}).outputs["f"]
+    want = np.fft.fft(x / np.abs(x).max(axis=1, keepdims=True), axis=1)[:, :32]
+    for chirp in range(2):  # both chirps use the whole code range
+        assert sft_rmse(y[chirp], want[chirp]) < 0.03

@@ -121,13 +121,16 @@ class LoweringContext:
         return HostValue(node=value.node, type=value.type)
 
     def encode(self, value: Value, *, consumer: str, code: LatencyCode | RateCode,
-               split: Split = "none", motif: str) -> Population:
+               split: Split = "none", motif: str,
+               normalize_axes: tuple[str, ...] = ()) -> Population:
         """A source population in the open network that carries ``value`` with ``code``.
 
         The population has the value's axes plus a ``part`` axis if ``split``
         adds one; its id is ``"<consumer>/in"`` and its encoder's port is the
         value's node id.  A spike value is decoded to the host first (use its
-        spikes directly instead where the consuming motif can).
+        spikes directly instead where the consuming motif can).  ``normalize_axes``
+        (the ``per-input`` policy) makes the encoder divide each slice over those
+        axes by its largest part at run time.
         """
         host = self.to_host(value)
         if not host.type.complex and split in ("re_im", "re_im_signed"):
@@ -143,7 +146,7 @@ class LoweringContext:
             shape[PART_AXIS] = N_PARTS[split]
         pop = builder.population(consumer, "in", shape, motif=motif, source=True)
         builder.encoder(Encoder(port=host.node, population=pop.id, code=code, split=split,
-                                node=host.node))
+                                node=host.node, normalize_axes=tuple(normalize_axes)))
         return pop
 
     def spike_value(self, node: str, population: Population, decoder: Decoder,

@@ -59,7 +59,7 @@ import scipy.sparse as sp
 
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import PART_IN, PART_OUT, dft_axes
-from compiler.lowering.dft_rate import calibrated_bound
+from compiler.lowering.dft_rate import calibrated_bound, normalize_axes_of
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
 from compiler.snn import PART_AXIS, Decoder, LatencyCode, NeuronParams, Phase
@@ -310,7 +310,8 @@ def lower_fft(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> S
     found = calibrated_bound(ctx, value.node)
     x_bound = found if found else float(ctx.option("input_range", 1.0))
     code = LatencyCode(t_min=0, t_max=steps, x_min=-x_bound, x_max=x_bound)
-    source = ctx.encode(value, consumer=node, code=code, split=split, motif=MOTIF)
+    source = ctx.encode(value, consumer=node, code=code, split=split, motif=MOTIF,
+                        normalize_axes=normalize_axes_of(ctx, value.node))
     real = [_real_coo(a, split if i == 0 else "re_im") for i, a in enumerate(stages)]
     bounds = _bounds(ctx, node, real, split, x_bound)
     b = ctx.builder()

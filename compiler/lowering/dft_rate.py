@@ -91,6 +91,7 @@ __all__ = [
     "rate_threshold",
     "worst_case_bound",
     "calibrated_bound",
+    "normalize_axes_of",
 ]
 
 #: Motif name in the registry and the compile option ``motifs``.
@@ -126,11 +127,8 @@ def calibrated_bound(ctx: LoweringContext, node: str) -> float | None:
     or a mapping): ``max_part``, else ``max(max_re, max_im)``, times the compile
     option ``headroom`` (default 1).
 
-    Raises
-    ------
-    CompileError
-        If the record asks for per-input normalisation (``normalize_axes``): the
-        ``rate`` and ``time-fft`` encoders do not normalise at run time.
+    Under the ``per-input`` policy the record holds normalised values, and the
+    encoder normalises at run time (:func:`normalize_axes_of`).
 
     Examples
     --------
@@ -147,17 +145,27 @@ def calibrated_bound(ctx: LoweringContext, node: str) -> float | None:
     def get(name: str):
         return rec.get(name) if isinstance(rec, dict) else getattr(rec, name, None)
 
-    if get("normalize_axes"):
-        raise CompileError(f"node {node!r}: per-input calibration normalises it over "
-                           f"{tuple(get('normalize_axes'))} at run time, which the rate and "
-                           "time-fft motifs do not support; compile with calibration='static'",
-                           node=node)
     bound = get("max_part")
     if bound is None and get("max_re") is not None:
         bound = max(get("max_re"), get("max_im") or 0.0)
     if not bound or bound <= 0:
         return None
     return float(bound) * float(ctx.option("headroom", 1.0))
+
+
+def normalize_axes_of(ctx: LoweringContext, node: str) -> tuple[str, ...]:
+    """The axes the ``per-input`` policy normalises ``node``'s value over (``()`` if static).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> normalize_axes_of(SimpleNamespace(calibration={"x": {"normalize_axes": ["sample"]}}), "x")
+    ('sample',)
+    """
+    rec = (ctx.calibration or {}).get(node)
+    axes = (rec.get("normalize_axes") if isinstance(rec, dict)
+            else getattr(rec, "normalize_axes", None)) if rec is not None else None
+    return tuple(axes or ())
 
 
 def worst_case_bound(m: np.ndarray, in_split: Split, x_bound: float) -> float:
@@ -207,7 +215,8 @@ def _rate_input(ctx: LoweringContext, node: str, value: Value, steps: int):
     found = calibrated_bound(ctx, value.node)
     x_bound = found if found else float(ctx.option("input_range", 1.0))
     rate_code = RateCode(x_min=0.0, x_max=x_bound, max_rate=INPUT_RATE, phase=INPUT_PHASE)
-    pop = ctx.encode(value, consumer=node, code=rate_code, split=split, motif=MOTIF)
+    pop = ctx.encode(value, consumer=node, code=rate_code, split=split, motif=MOTIF,
+                     normalize_axes=normalize_axes_of(ctx, value.node))
     return pop.id, split, x_bound / INPUT_RATE, x_bound
 
 
