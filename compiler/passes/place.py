@@ -91,6 +91,8 @@ def greedy_placer(demand: np.ndarray, limits: np.ndarray, affinity,
         The core of each block; ``-1`` where none was left.
     """
     n = len(demand)
+    if n == 0:  # nothing to place (a program without spiking stages)
+        return np.zeros(0, np.int64)
     share = np.where(np.isfinite(limits), demand / np.where(np.isfinite(limits), limits, 1), 0)
     aff = sp.csr_matrix(affinity)
     rank = np.empty(n, np.int64)
