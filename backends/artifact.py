@@ -59,27 +59,32 @@ Examples
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import io
 import json
-import math
 import operator
-import zipfile
 from collections.abc import Mapping
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
 
 import numpy as np
 from pydantic import ValidationError
 
+from backends.artifact_codec import network_from_manifest, population_entry, projection_entry
+from backends.artifact_io import (
+    ARRAYS_FILE,
+    MANIFEST_FILE,
+    canonical_json,
+    finite_json,
+    npz_bytes,
+    plain_json,
+    read_bytes,
+    read_npz,
+    render_json,
+    sha256_hex,
+    write_atomic,
+)
 from compiler.snn import (
-    Decoder,
-    Encoder,
     MatrixProjection,
-    Population,
     SpikingNetwork,
     StencilProjection,
 )
@@ -88,8 +93,6 @@ from ir.errors import ArtifactError, NetworkError
 __all__ = [
     "ARTIFACT_FORMAT",
     "ARTIFACT_VERSION",
-    "ARRAYS_FILE",
-    "MANIFEST_FILE",
     "PROJECTION_KINDS",
     "load",
     "read_manifest",
@@ -100,14 +103,11 @@ __all__ = [
 ARTIFACT_FORMAT = "radarsnn.spiking-network"
 #: Format version ``MAJOR.MINOR`` this module writes (and the major it reads).
 ARTIFACT_VERSION = "1.0"
-MANIFEST_FILE = "manifest.json"
-ARRAYS_FILE = "arrays.npz"
 #: Projection classes by their ``kind``: the only classes :func:`load` instantiates.
 PROJECTION_KINDS: Mapping[str, type] = MappingProxyType(
     {"matrix": MatrixProjection, "stencil": StencilProjection}
 )
 
-_ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
 _HASH_KEY = "manifest_sha256"
 
 
@@ -118,82 +118,6 @@ def _radarsnn_version() -> str:
         return "0+unknown"
 
 
-def _sha256(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
-def _canonical(body: Mapping) -> bytes:
-    return json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True,
-                      allow_nan=False).encode()
-
-
-def _render(manifest: Mapping) -> bytes:
-    return (json.dumps(manifest, sort_keys=True, indent=2, ensure_ascii=True, allow_nan=False)
-            + "\n").encode()
-
-
-def _finite_json(obj: Any) -> Any:
-    """Non-finite floats as the strings pydantic parses back (``"NaN"``, ``"±Infinity"``)."""
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return "NaN" if math.isnan(obj) else ("Infinity" if obj > 0 else "-Infinity")
-    if isinstance(obj, dict):
-        return {k: _finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite_json(v) for v in obj]
-    return obj
-
-
-def _plain_json(obj: Any, what: str) -> Any:
-    """``obj`` if it survives a strict JSON round trip unchanged, else :class:`ArtifactError`."""
-    try:
-        same = json.loads(json.dumps(obj, allow_nan=False, sort_keys=True)) == obj
-    except (TypeError, ValueError) as exc:
-        same, why = False, str(exc)
-    else:
-        why = "it changes on a JSON round trip"
-    if not same:
-        raise ArtifactError(f"{what} cannot be stored: {why}; use only dicts with str keys, lists, "
-                            "str, int, bool, None and finite floats")
-    return obj
-
-
-def _npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
-    """A deterministic ``.npz``: stored members, fixed dates and attributes, keys in order."""
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as zf:
-        for key, array in arrays.items():
-            npy = io.BytesIO()
-            np.lib.format.write_array(npy, array, allow_pickle=False)
-            info = zipfile.ZipInfo(f"{key}.npy", date_time=_ZIP_DATE)
-            info.create_system, info.external_attr = 3, 0o644 << 16
-            zf.writestr(info, npy.getvalue())
-    return buffer.getvalue()
-
-
-def _array_ref(key: str, array: np.ndarray, arrays: dict[str, np.ndarray]) -> dict:
-    a = np.asarray(array)
-    a = np.ascontiguousarray(a.astype(a.dtype.newbyteorder("<")))
-    arrays[key] = a
-    return {"file": ARRAYS_FILE, "key": key, "dtype": a.dtype.str, "shape": list(a.shape)}
-
-
-def _population_json(pop: Population) -> dict:
-    data = _finite_json(pop.model_dump(mode="json"))
-    data["shape"] = [[axis, size] for axis, size in pop.shape.items()]  # order is memory order
-    return data
-
-
-def _projection_json(index: int, proj: Any, arrays: dict[str, np.ndarray]) -> dict:
-    data: dict[str, Any] = {"arrays": {}}
-    for f in dataclasses.fields(proj):
-        value = getattr(proj, f.name)
-        if isinstance(value, np.ndarray):
-            key = f"projections.{index}.{f.name}"
-            data["arrays"][f.name] = _array_ref(key, value, arrays)
-        elif value is not None:
-            data[f.name] = _plain_json(list(value) if isinstance(value, tuple) else value,
-                                       f"projection {proj.id!r} field {f.name!r}")
-    return data
 
 
 def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | None = None,
@@ -249,45 +173,32 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
             raise ArtifactError(f"projection {proj.id!r}: kind {proj.kind!r} "
                                 f"({type(proj).__name__}) is not in the registry {sorted(kinds)}",
                                 node=proj.id)
-        projections.append(_projection_json(index, proj, arrays))
-    npz = _npz_bytes(arrays)
+        projections.append(projection_entry(index, proj, arrays))
+    npz = npz_bytes(arrays)
     body = {
         "format": ARTIFACT_FORMAT,
         "format_version": ARTIFACT_VERSION,
         "radarsnn_version": _radarsnn_version(),
-        "network": {"name": _plain_json(network.name, "network name"),
+        "network": {"name": plain_json(network.name, "network name"),
                     "n_steps": operator.index(network.n_steps),
-                    "meta": _plain_json(network.meta, "network meta")},
-        "populations": [_population_json(p) for p in network.populations],
+                    "meta": plain_json(network.meta, "network meta")},
+        "populations": [population_entry(p) for p in network.populations],
         "projections": projections,
-        "encoders": [_finite_json(e.model_dump(mode="json")) for e in network.encoders],
-        "decoders": [_finite_json(d.model_dump(mode="json")) for d in network.decoders],
-        "extra": _plain_json(dict(extra or {}), "extra"),
-        "arrays": {"file": ARRAYS_FILE, "sha256": _sha256(npz), "n_bytes": len(npz)},
+        "encoders": [finite_json(e.model_dump(mode="json")) for e in network.encoders],
+        "decoders": [finite_json(d.model_dump(mode="json")) for d in network.decoders],
+        "extra": plain_json(dict(extra or {}), "extra"),
+        "arrays": {"file": ARRAYS_FILE, "sha256": sha256_hex(npz), "n_bytes": len(npz)},
     }
-    manifest = {**body, _HASH_KEY: _sha256(_canonical(body))}
+    manifest = {**body, _HASH_KEY: sha256_hex(canonical_json(body))}
     folder = Path(directory)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        _write_atomic(folder / ARRAYS_FILE, npz)
-        _write_atomic(folder / MANIFEST_FILE, _render(manifest))
+        write_atomic(folder / ARRAYS_FILE, npz)
+        write_atomic(folder / MANIFEST_FILE, render_json(manifest))
     except OSError as exc:
         raise ArtifactError(f"cannot write the artifact to {folder}: {exc}") from exc
     return folder
 
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(data)
-    tmp.replace(path)
-
-
-def _read(path: Path) -> bytes:
-    try:
-        return path.read_bytes()
-    except OSError as exc:
-        raise ArtifactError(f"{path}: cannot read ({exc.strerror or exc}); is this an artifact "
-                            "directory written by backends.artifact.save?") from exc
 
 
 def _check_version(manifest: dict, path: Path) -> None:
@@ -337,7 +248,7 @@ def read_manifest(directory: str | Path) -> dict:
     ir.errors.ArtifactError: .../manifest.json: cannot read (No such file or directory); ...
     """
     path = Path(directory) / MANIFEST_FILE
-    raw = _read(path)
+    raw = read_bytes(path)
     try:
         manifest = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -346,14 +257,14 @@ def read_manifest(directory: str | Path) -> dict:
         raise ArtifactError(f"{path}: the top level is a {type(manifest).__name__}, not an object")
     _check_version(manifest, path)
     try:
-        canonical = _render(manifest) == raw
+        canonical = render_json(manifest) == raw
     except ValueError:  # NaN/Infinity tokens: not strict JSON
         canonical = False
     if not canonical:
         raise ArtifactError(f"{path}: not in the canonical form save() writes (edited by hand?); "
                             "re-emit the artifact")
     body = {k: v for k, v in manifest.items() if k != _HASH_KEY}
-    digest = _sha256(_canonical(body))
+    digest = sha256_hex(canonical_json(body))
     if manifest.get(_HASH_KEY) != digest:
         raise ArtifactError(f"{path}: content digest mismatch (stored "
                             f"{manifest.get(_HASH_KEY)!r}, computed {digest!r}); the manifest "
@@ -366,70 +277,14 @@ def _read_arrays(path: Path, manifest: dict) -> dict[str, np.ndarray]:
     if not isinstance(spec, dict) or spec.get("file") != ARRAYS_FILE:
         raise ArtifactError(f"{path.with_name(MANIFEST_FILE)}: the 'arrays' entry must name "
                             f"{ARRAYS_FILE!r}, got {spec!r}")
-    raw = _read(path)
-    digest = _sha256(raw)
+    raw = read_bytes(path)
+    digest = sha256_hex(raw)
     if digest != spec.get("sha256") or len(raw) != spec.get("n_bytes"):
         raise ArtifactError(f"{path}: {len(raw)} bytes with SHA-256 {digest}, but the manifest "
                             f"declares {spec.get('n_bytes')} bytes with {spec.get('sha256')}; "
                             "the file is truncated or was modified: re-emit the artifact")
-    try:
-        with np.load(io.BytesIO(raw), allow_pickle=False) as npz:
-            return {key: npz[key] for key in npz.files}
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
-        raise ArtifactError(f"{path}: not a readable .npz of plain arrays ({exc})") from exc
+    return read_npz(raw, path)
 
-
-def _take_array(ref: Any, arrays: dict[str, np.ndarray], used: set[str], where: str) -> np.ndarray:
-    if not isinstance(ref, dict) or ref.get("file") != ARRAYS_FILE:
-        raise ArtifactError(f"{where}: array reference {ref!r} must name file {ARRAYS_FILE!r}")
-    key = ref.get("key")
-    if key not in arrays:
-        raise ArtifactError(f"{where}: array {key!r} is missing from {ARRAYS_FILE}")
-    array = arrays[key]
-    if array.dtype.str != ref.get("dtype") or list(array.shape) != ref.get("shape"):
-        raise ArtifactError(f"{where}: array {key!r} in {ARRAYS_FILE} has dtype {array.dtype.str} "
-                            f"and shape {list(array.shape)}, the manifest declares "
-                            f"{ref.get('dtype')} and {ref.get('shape')}")
-    used.add(key)
-    return array
-
-
-def _projection(data: dict, arrays: dict, used: set[str], kinds: Mapping[str, type],
-                where: str) -> Any:
-    cls = kinds.get(data.get("kind"))
-    if cls is None:
-        raise ArtifactError(f"{where}: unknown projection kind {data.get('kind')!r}; this "
-                            f"radarsnn knows {sorted(kinds)}")
-    fields = {f.name for f in dataclasses.fields(cls)}
-    refs = data.get("arrays", {})
-    unknown = (set(data) - {"arrays"} | set(refs)) - fields
-    if unknown:
-        raise ArtifactError(f"{where}: fields {sorted(unknown)} are not fields of {cls.__name__}")
-    kwargs = {k: v for k, v in data.items() if k != "arrays"}
-    kwargs.update({k: _take_array(r, arrays, used, f"{where}.{k}") for k, r in refs.items()})
-    return cls(**kwargs)
-
-
-def _network(manifest: dict, arrays: dict, kinds: Mapping[str, type], path: Path) -> SpikingNetwork:
-    used: set[str] = set()
-    populations = []
-    for data in manifest["populations"]:
-        pairs = data["shape"]
-        shape = dict(pairs)
-        if len(shape) != len(pairs):
-            raise ArtifactError(f"{path}: population {data.get('id')!r} repeats an axis in {pairs}")
-        populations.append(Population.model_validate({**data, "shape": shape}))
-    projections = [_projection(d, arrays, used, kinds, f"{path}: projections[{i}]")
-                   for i, d in enumerate(manifest["projections"])]
-    if set(arrays) - used:
-        raise ArtifactError(f"{path.with_name(ARRAYS_FILE)}: holds arrays the manifest does not "
-                            f"refer to: {sorted(set(arrays) - used)}")
-    info = manifest["network"]
-    return SpikingNetwork(
-        name=info["name"], n_steps=info["n_steps"], meta=info["meta"],
-        populations=populations, projections=projections,
-        encoders=[Encoder.model_validate(e) for e in manifest["encoders"]],
-        decoders=[Decoder.model_validate(d) for d in manifest["decoders"]])
 
 
 def load(directory: str | Path, *, kinds: Mapping[str, type] = PROJECTION_KINDS
@@ -479,7 +334,7 @@ def load(directory: str | Path, *, kinds: Mapping[str, type] = PROJECTION_KINDS
     arrays = _read_arrays(folder / ARRAYS_FILE, manifest)
     path = folder / MANIFEST_FILE
     try:
-        return _network(manifest, arrays, kinds, path).validate()
+        return network_from_manifest(manifest, arrays, kinds, path).validate()
     except ValidationError as exc:
         errors = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']} (got {e['input']!r})"
                            for e in exc.errors())

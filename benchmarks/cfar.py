@@ -59,8 +59,8 @@ def random_scene(rng: np.random.Generator):
 def rd_maps(n: int, *, seed: int) -> np.ndarray:
     """``n`` linear-power range-Doppler maps ``(n, 256, 64)`` of random carrada scenes."""
     from radar.config import preset
-    from radar.dsp import range_doppler_map
     from radar.scene import simulate_frame
+    from radar.spectra import range_doppler_map
 
     cfg, rng = preset("carrada"), np.random.default_rng(seed)
     out = np.empty((n, 256, 64))

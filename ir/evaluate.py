@@ -57,13 +57,14 @@ EvalRegistry = Mapping[type[Op], Implementation]
 
 
 def _window(node_id: str, op: Window, args: list, types: list) -> np.ndarray:
-    from radar.dsp import apply_window
+    from radar.windows import apply_window
 
     return apply_window(args[0], op.kind, axis=types[0].index(op.axis))
 
 
 def _dft(node_id: str, op: DFT, args: list, types: list) -> np.ndarray:
-    from radar.dsp import apply_window, dft
+    from radar.dsp import dft
+    from radar.windows import apply_window
 
     ax = types[0].index(op.axis)
     x = args[0] if op.window is None else apply_window(args[0], op.window, axis=ax)

@@ -2,17 +2,21 @@
 loaders for real captures, and the conventional DSP/CFAR reference.
 
 Submodules: :mod:`radar.config`, :mod:`radar.scene`, :mod:`radar.loaders`,
-:mod:`radar.dsp`, :mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
+:mod:`radar.windows`, :mod:`radar.dsp`, :mod:`radar.spectra`, :mod:`radar.cfar_window`,
+:mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
 ``radar.cfar.cfar``; the package does not re-export it, so ``radar.cfar`` stays
 the module.
 """
 
-from radar.cfar import n_training, noise_estimate, training_mask
+from radar.cfar import noise_estimate
 from radar.cfar_theory import ca_alpha, ca_pfa, os_alpha, os_pfa
+from radar.cfar_window import n_training, training_mask
 from radar.config import PRESETS, RadarConfig, preset
-from radar.dsp import apply_window, dft, dft_matrix, magnitude, range_doppler_map, to_db
+from radar.dsp import dft, dft_matrix, magnitude, to_db
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Frame, Scene, Target, simulate_frame
+from radar.spectra import range_doppler_map
+from radar.windows import apply_window
 
 __all__ = [
     "PRESETS",

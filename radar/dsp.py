@@ -1,4 +1,4 @@
-"""Conventional radar DSP: windows, DFTs, magnitude, dB and the range-Doppler map.
+"""Conventional radar DSP: DFTs, magnitude and dB.
 
 This is the golden reference the spiking lowerings are checked against, so every
 function returns float64 or complex128 and the DFT is defined by one explicit
@@ -7,9 +7,6 @@ reproduces to rounding error.
 
 Conventions
 -----------
-* Windows are **symmetric** (``scipy.signal.get_window(..., fftbins=False)``, the
-  same coefficients as ``np.hanning``/``np.hamming``/``np.blackman``): the first
-  and last taps are mirror images, ``w[l] = w[n-1-l]``.
 * DFT: ``X[k] = sum_l x[l] exp(-2j*pi*k*l/n_fft)``, no scaling; ``n_fft > n_in``
   zero-pads. ``keep="positive"`` keeps bins ``0..n_fft//2-1`` (real-sampled
   radars); ``shift=True`` applies ``fftshift`` to the kept bins, so with
@@ -21,35 +18,21 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 import numpy as np
-import scipy.signal
 
 from ir.errors import RadarConfigError
+from radar._checks import _as_float, _axis, _choice, _positive_int
 
 __all__ = [
-    "WINDOW_KINDS",
     "MAGNITUDE_KINDS",
     "KEEP_MODES",
-    "window_coefficients",
-    "apply_window",
     "dft_bins",
     "dft_matrix",
     "dft",
     "magnitude",
     "to_db",
-    "range_doppler_map",
-    "angle_fft",
 ]
 
-#: Our window names -> scipy's names.
-_SCIPY_WINDOW: Mapping[str, str] = {
-    "hann": "hann",
-    "hamming": "hamming",
-    "blackman": "blackman",
-    "rect": "boxcar",
-}
-WINDOW_KINDS = tuple(_SCIPY_WINDOW)
-
-#: Magnitude kind -> function of a complex array (the registry both public entry points use).
+#: Magnitude kind -> function of a complex array (used by magnitude and radar.spectra).
 _MAGNITUDE: Mapping[str, Callable[[np.ndarray], np.ndarray]] = {
     "l2": np.abs,
     "l1": lambda z: np.abs(z.real) + np.abs(z.imag),
@@ -59,107 +42,6 @@ MAGNITUDE_KINDS = tuple(_MAGNITUDE)
 
 KEEP_MODES = ("all", "positive")
 _DB_FACTOR = {"amplitude": 20.0, "power": 10.0}
-
-
-def _choice(value: object, choices: tuple[str, ...], name: str) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise RadarConfigError(
-            f"{name}={value!r} is not a valid choice; use one of {', '.join(map(repr, choices))}"
-        )
-    return value
-
-
-def _axis(axis: int, ndim: int, name: str) -> int:
-    if isinstance(axis, bool) or not isinstance(axis, int | np.integer) or not -ndim <= axis < ndim:
-        raise RadarConfigError(
-            f"{name}={axis!r} is out of range for an input with {ndim} dimension(s); "
-            f"use an integer in {-ndim}..{ndim - 1}"
-        )
-    return int(axis) % ndim
-
-
-def _positive_int(value: object, name: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise RadarConfigError(f"{name}={value!r} must be a positive integer (>= 1)")
-    return int(value)
-
-
-def _as_float(x: object) -> np.ndarray:
-    """float64 for real input, complex128 for complex input."""
-    arr = np.asarray(x)
-    return arr.astype(np.complex128 if np.iscomplexobj(arr) else np.float64, copy=False)
-
-
-def window_coefficients(kind: str, n: int) -> np.ndarray:
-    """The ``n`` symmetric taps of a window.
-
-    Parameters
-    ----------
-    kind : {"hann", "hamming", "blackman", "rect"}
-        Window family. ``"rect"`` is all ones (no window).
-    n : int
-        Number of taps, >= 1.
-
-    Returns
-    -------
-    ndarray of float64, shape (n,)
-        Symmetric coefficients, e.g. Hann ``w[l] = 0.5 - 0.5 cos(2 pi l/(n-1))``.
-
-    Raises
-    ------
-    RadarConfigError
-        If ``kind`` is unknown or ``n`` is not a positive integer.
-
-    Examples
-    --------
-    >>> window_coefficients("hann", 5).tolist()
-    [0.0, 0.5, 1.0, 0.5, 0.0]
-    >>> window_coefficients("rect", 3).tolist()
-    [1.0, 1.0, 1.0]
-
-    Notes
-    -----
-    Symmetric (not periodic/"DFT-even") windows, as ``np.hanning`` and MATLAB's
-    defaults; a length-1 window is ``[1.0]``.
-    """
-    name = _SCIPY_WINDOW[_choice(kind, WINDOW_KINDS, "window kind")]
-    n = _positive_int(n, "window length n")
-    return np.asarray(scipy.signal.get_window(name, n, fftbins=False), dtype=np.float64)
-
-
-def apply_window(x: object, kind: str, axis: int = -1) -> np.ndarray:
-    """Multiply ``x`` by a symmetric window along one axis.
-
-    Parameters
-    ----------
-    x : array_like
-        Real or complex samples.
-    kind : {"hann", "hamming", "blackman", "rect"}
-        Window family (see :func:`window_coefficients`).
-    axis : int, default -1
-        Axis along which the window runs.
-
-    Returns
-    -------
-    ndarray
-        ``x * w`` broadcast along ``axis``; float64 or complex128.
-
-    Raises
-    ------
-    RadarConfigError
-        For an unknown kind or an axis out of range.
-
-    Examples
-    --------
-    >>> apply_window(np.ones((2, 3)), "hann", axis=1).tolist()
-    [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
-    """
-    arr = _as_float(x)
-    ax = _axis(axis, arr.ndim, "axis")
-    w = window_coefficients(kind, arr.shape[ax])
-    shape = [1] * arr.ndim
-    shape[ax] = w.size
-    return arr * w.reshape(shape)
 
 
 def _n_fft(n_in: int, n_fft: int | None) -> int:
@@ -389,132 +271,3 @@ def to_db(x: object, *, domain: str = "amplitude", floor_db: float = -300.0) -> 
         arr = np.abs(arr).astype(np.float64, copy=False)
     with np.errstate(divide="ignore"):
         return np.maximum(factor * np.log10(arr), float(floor_db))
-
-
-def range_doppler_map(
-    adc: object,
-    *,
-    window: str = "hann",
-    keep: str = "all",
-    shift: bool = True,
-    magnitude: str = "l2",
-    rx_axis: int | None = 0,
-    chirp_axis: int = -2,
-    sample_axis: int = -1,
-    sum_rx: bool = True,
-) -> np.ndarray:
-    """The conventional range-Doppler map of one FMCW frame.
-
-    Parameters
-    ----------
-    adc : array_like
-        Cube ``[rx, chirp, sample]`` (axes set by the ``*_axis`` arguments), or a
-        matrix ``[chirp, sample]`` when ``rx_axis=None``.
-    window : {"hann", "hamming", "blackman", "rect"}
-        Window along the sample (fast-time) axis before the range DFT.
-    keep : {"all", "positive"}
-        Range bins to keep: ``"positive"`` for real-sampled ADCs, ``"all"`` for IQ.
-    shift : bool, default True
-        fftshift the Doppler bins (zero velocity at index ``n_chirps//2``).
-    magnitude : {"l2", "l1", "square"}
-        Magnitude applied to each complex RD cell (see :func:`magnitude`).
-    rx_axis, chirp_axis, sample_axis : int
-        Axes of ``adc``; ``rx_axis=None`` means there is no receiver axis. The defaults
-        (0, -2, -1) read ``[rx, chirp, sample]`` cubes and ``[chirp, sample]`` matrices.
-    sum_rx : bool, default True
-        Sum magnitudes over receivers (non-coherent integration).
-
-    Returns
-    -------
-    ndarray of float64
-        ``[range, doppler]``, or ``[rx, range, doppler]`` if ``sum_rx`` is False
-        and there is an rx axis.
-
-    Raises
-    ------
-    RadarConfigError
-        For a wrong number of dimensions, repeated or out-of-range axes, or bad kinds.
-
-    Examples
-    --------
-    A target in range bin 1 moving at Doppler bin 1, 4 chirps x 4 samples:
-
-    >>> l, m = np.arange(4), np.arange(4)[:, None]
-    >>> cube = np.exp(2j * np.pi * (l + m) / 4)[None]
-    >>> rd = range_doppler_map(cube, window="rect")
-    >>> np.argwhere(rd > 1).tolist(), float(rd.max().round(9))
-    ([[1, 3]], 16.0)
-
-    Notes
-    -----
-    ``rd[r, v] = sum_rx |sum_m sum_l w[l] adc[rx, m, l] e^{-2j pi r l/L} e^{-2j pi k_v m/M}|``
-    with ``k_v`` the (shifted) Doppler bin of row ``v``.
-    """
-    arr = _as_float(adc)
-    magnitude_fn = _MAGNITUDE[_choice(magnitude, MAGNITUDE_KINDS, "magnitude kind")]
-    if rx_axis is None:
-        if arr.ndim != 2:
-            raise RadarConfigError(
-                f"adc has {arr.ndim} dimension(s) but rx_axis=None needs [chirp, sample] (2); "
-                "pass rx_axis for a 3D cube"
-            )
-        arr, rx_axis = arr[None], 0
-        chirp_axis = _axis(chirp_axis, 2, "chirp_axis") + 1
-        sample_axis = _axis(sample_axis, 2, "sample_axis") + 1
-        has_rx = False
-    else:
-        if arr.ndim != 3:
-            raise RadarConfigError(
-                f"adc has {arr.ndim} dimension(s) but the cube must be [rx, chirp, sample] (3); "
-                "use rx_axis=None for a single-receiver [chirp, sample] matrix"
-            )
-        has_rx = True
-    named = {"rx_axis": rx_axis, "chirp_axis": chirp_axis, "sample_axis": sample_axis}
-    axes = tuple(_axis(a, 3, name) for name, a in named.items())
-    if len(set(axes)) != 3:
-        raise RadarConfigError(
-            f"rx_axis, chirp_axis, sample_axis = {axes} must be three different axes"
-        )
-    cube = np.moveaxis(arr, axes, (0, 1, 2))
-    range_bins = dft(apply_window(cube, window, axis=2), axis=2, keep=keep)
-    rd = magnitude_fn(dft(range_bins, axis=1, shift=shift)).swapaxes(1, 2)
-    if not has_rx:
-        return rd[0]
-    return rd.sum(axis=0) if sum_rx else rd
-
-
-def angle_fft(
-    x: object, axis: int = -1, *, n_fft: int | None = None, window: str = "rect"
-) -> np.ndarray:
-    """Angle spectrum over a (virtual) uniform linear array, broadside at the centre.
-
-    Parameters
-    ----------
-    x : array_like
-        Complex snapshots with the array elements along ``axis``.
-    axis : int, default -1
-        Element axis.
-    n_fft : int, optional
-        Angle bins (zero-padding), ``>=`` the number of elements; default = elements.
-    window : {"hann", "hamming", "blackman", "rect"}
-        Taper across the elements.
-
-    Returns
-    -------
-    ndarray of complex128
-        ``dft(window * x, axis, n_fft=n_fft, keep="all", shift=True)``: bin ``n_fft//2`` is
-        broadside (zero spatial frequency).
-
-    Raises
-    ------
-    RadarConfigError
-        For a bad axis, window or ``n_fft``.
-
-    Examples
-    --------
-    >>> np.abs(angle_fft(np.ones(4))).round(9).tolist()
-    [0.0, 0.0, 4.0, 0.0]
-    """
-    arr = _as_float(x)
-    ax = _axis(axis, arr.ndim, "axis")
-    return dft(apply_window(arr, window, axis=ax), axis=ax, n_fft=n_fft, keep="all", shift=True)

@@ -18,7 +18,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from backends import ARTIFACT_VERSION, load, save
-from backends.artifact import ARRAYS_FILE, MANIFEST_FILE, read_manifest
+from backends.artifact import read_manifest
+from backends.artifact_io import ARRAYS_FILE, MANIFEST_FILE
 from compiler.snn import (
     N_PARTS,
     Decoder,

@@ -14,16 +14,9 @@ from scipy.special import gammaln
 
 import radar.cfar as cfar_module
 from ir.errors import RadarConfigError
-from radar.cfar import (
-    cfar,
-    cfar_threshold,
-    effective_k,
-    n_training,
-    noise_estimate,
-    training_counts,
-    training_mask,
-)
+from radar.cfar import cfar, cfar_threshold, noise_estimate
 from radar.cfar_theory import ca_alpha, ca_pfa, os_alpha, os_pfa
+from radar.cfar_window import effective_k, n_training, training_counts, training_mask
 
 # ---------------------------------------------------------------- brute-force reference
 

@@ -1,4 +1,4 @@
-"""Conventional DSP (radar.dsp): hand-worked values, matrix/FFT equivalence, real captures."""
+"""Conventional DSP (radar.dsp, .windows, .spectra): hand-worked values, matrix/FFT, captures."""
 
 from __future__ import annotations
 
@@ -8,19 +8,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from ir.errors import RadarConfigError
-from radar.dsp import (
-    MAGNITUDE_KINDS,
-    WINDOW_KINDS,
-    angle_fft,
-    apply_window,
-    dft,
-    dft_bins,
-    dft_matrix,
-    magnitude,
-    range_doppler_map,
-    to_db,
-    window_coefficients,
-)
+from radar.dsp import MAGNITUDE_KINDS, dft, dft_bins, dft_matrix, magnitude, to_db
+from radar.spectra import angle_fft, range_doppler_map
+from radar.windows import WINDOW_KINDS, apply_window, window_coefficients
 
 # ---------------------------------------------------------------- windows
 

@@ -243,7 +243,7 @@ def test_evaluate_matches_inferred_types(graph: Graph, seed: int) -> None:
 
 @given(chains(max_ops=3), st.sampled_from(["yaml", "json"]))
 def test_cfar_geometry_matches_radar_n_training(graph: Graph, fmt: str) -> None:
-    from radar.cfar import n_training
+    from radar.cfar_window import n_training
 
     types = graph.infer_types()
     for node_id in graph:

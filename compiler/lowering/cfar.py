@@ -6,7 +6,7 @@ input's axes.  The input map is encoded once (one latency spike per cell, see
 projections:
 
 * the **training stencil** — one kernel shared by every CUT, built from
-  :func:`radar.cfar.training_mask` (guard cells and the CUT unconnected), with
+  :func:`radar.cfar_window.training_mask` (guard cells and the CUT unconnected), with
   ``wrap``/``clip`` per axis; a clipped CUT simply has ``n_avail < N`` synapses;
 * the **CUT projection** — a diagonal (one synapse per neuron, from its own
   cell) whose per-neuron weight carries the clip-edge renormalisation.
@@ -73,7 +73,7 @@ from compiler.lowering.values import Value
 from compiler.snn import Decoder, NeuronParams, Phase, SpikingNetwork
 from ir.errors import CompileError
 from ir.ops import CFAR
-from radar.cfar import effective_k, training_counts, training_mask
+from radar.cfar_window import effective_k, training_counts, training_mask
 
 __all__ = ["MOTIF", "DEFAULT_STEPS", "register_cfar", "lower_cfar", "cfar_counters",
            "cfar_op_counts"]

@@ -39,7 +39,8 @@ from compiler.snn import N_PARTS, PART_AXIS, Split
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
 from ir.types import TensorType
-from radar.dsp import dft_matrix, window_coefficients
+from radar.dsp import dft_matrix
+from radar.windows import window_coefficients
 
 __all__ = [
     "PART_IN",

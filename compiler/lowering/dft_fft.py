@@ -65,7 +65,8 @@ from compiler.lowering.values import SpikeValue, Value
 from compiler.snn import PART_AXIS, Decoder, LatencyCode, NeuronParams, Phase
 from ir.errors import CompileError
 from ir.ops import DFT, Op
-from radar.dsp import dft_bins, window_coefficients
+from radar.dsp import dft_bins
+from radar.windows import window_coefficients
 
 __all__ = [
     "MOTIF", "DEFAULT_STEPS", "WEIGHT_QUANTUM", "STAGE_HEADROOM",

@@ -45,7 +45,7 @@ from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
 from ir import Graph
-from radar.dsp import window_coefficients
+from radar.windows import window_coefficients
 
 __all__ = ["FuseLinear"]
 

@@ -29,7 +29,7 @@ class Window(Op):
     axis : str
         The axis to window (its size N sets the window length).
     kind : {"hann", "hamming", "blackman", "rect"}, default "hann"
-        Symmetric windows of length :math:`N` (:func:`radar.dsp.window_coefficients`),
+        Symmetric windows of length :math:`N` (:func:`radar.windows.window_coefficients`),
         e.g. hann :math:`w[n] = 0.5 - 0.5\cos(2\pi n/(N-1))`, hamming
         :math:`0.54 - 0.46\cos(2\pi n/(N-1))`, blackman
         :math:`0.42 - 0.5\cos(2\pi n/(N-1)) + 0.08\cos(4\pi n/(N-1))`, rect

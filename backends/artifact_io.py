@@ -1,0 +1,298 @@
+"""Deterministic bytes for artifacts: canonical JSON, SHA-256, a reproducible ``.npz``,
+atomic writes and checked reads.
+
+Nothing here knows about networks; :mod:`backends.artifact` builds the format on top.
+Every writer is a pure function of its input (sorted keys, fixed zip dates and
+attributes, no compression), so equal inputs give equal bytes and equal digests.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ir.errors import ArtifactError
+
+__all__ = [
+    "ARRAYS_FILE",
+    "MANIFEST_FILE",
+    "canonical_json",
+    "finite_json",
+    "npz_bytes",
+    "plain_json",
+    "read_bytes",
+    "read_npz",
+    "render_json",
+    "sha256_hex",
+    "write_atomic",
+]
+
+#: The two files of an artifact directory (see :mod:`backends.artifact`).
+MANIFEST_FILE = "manifest.json"
+ARRAYS_FILE = "arrays.npz"
+
+_ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
+
+
+def sha256_hex(data: bytes) -> str:
+    """SHA-256 digest of ``data`` as 64 lowercase hex digits.
+
+    Parameters
+    ----------
+    data : bytes
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> sha256_hex(b"")[:16]
+    'e3b0c44298fc1c14'
+    """
+    return hashlib.sha256(data).hexdigest()
+
+
+def canonical_json(body: Mapping) -> bytes:
+    """The hashed form: ``json.dumps(sort_keys=True, separators=(",", ":"), ensure_ascii=True)``.
+
+    Parameters
+    ----------
+    body : mapping
+        Strict JSON data (no NaN/inf).
+
+    Returns
+    -------
+    bytes
+        UTF-8 (pure ASCII) text.
+
+    Raises
+    ------
+    ValueError
+        For non-finite floats (``allow_nan=False``).
+
+    Examples
+    --------
+    >>> canonical_json({"b": 1, "a": [1.5, None]})
+    b'{"a":[1.5,null],"b":1}'
+    """
+    return json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True,
+                      allow_nan=False).encode()
+
+
+def render_json(manifest: Mapping) -> bytes:
+    """The on-disk form: sorted keys, two-space indent, ASCII, a final newline.
+
+    Parameters
+    ----------
+    manifest : mapping
+        Strict JSON data (no NaN/inf).
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    ValueError
+        For non-finite floats (``allow_nan=False``).
+
+    Examples
+    --------
+    >>> render_json({"b": 1, "a": 2})
+    b'{\\n  "a": 2,\\n  "b": 1\\n}\\n'
+    """
+    return (json.dumps(manifest, sort_keys=True, indent=2, ensure_ascii=True, allow_nan=False)
+            + "\n").encode()
+
+
+def finite_json(obj: Any) -> Any:
+    """Non-finite floats as the strings pydantic parses back (``"NaN"``, ``"±Infinity"``).
+
+    Parameters
+    ----------
+    obj : JSON-like
+        Nested dicts, lists/tuples and scalars (tuples become lists).
+
+    Returns
+    -------
+    JSON-like
+        ``obj`` with every non-finite float replaced, so it is strict JSON.
+
+    Examples
+    --------
+    >>> finite_json({"x": [float("nan"), -float("inf"), 1.0]})
+    {'x': ['NaN', '-Infinity', 1.0]}
+    """
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return "NaN" if math.isnan(obj) else ("Infinity" if obj > 0 else "-Infinity")
+    if isinstance(obj, dict):
+        return {k: finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [finite_json(v) for v in obj]
+    return obj
+
+
+def plain_json(obj: Any, what: str) -> Any:
+    """``obj`` if it survives a strict JSON round trip unchanged.
+
+    Parameters
+    ----------
+    obj : object
+        Caller data to store.
+    what : str
+        What ``obj`` is, for the error message (e.g. ``"network meta"``).
+
+    Returns
+    -------
+    object
+        ``obj`` itself.
+
+    Raises
+    ------
+    ArtifactError
+        If ``obj`` is not serialisable or changes on the round trip (int keys,
+        tuples, NaN, ...).
+
+    Examples
+    --------
+    >>> plain_json({"a": [1, 2.5]}, "extra")
+    {'a': [1, 2.5]}
+    >>> plain_json({1: "x"}, "extra")  # doctest: +IGNORE_EXCEPTION_DETAIL
+    Traceback (most recent call last):
+    ir.errors.ArtifactError: extra cannot be stored: it changes on a JSON round trip; ...
+    """
+    try:
+        same = json.loads(json.dumps(obj, allow_nan=False, sort_keys=True)) == obj
+    except (TypeError, ValueError) as exc:
+        same, why = False, str(exc)
+    else:
+        why = "it changes on a JSON round trip"
+    if not same:
+        raise ArtifactError(f"{what} cannot be stored: {why}; use only dicts with str keys, lists, "
+                            "str, int, bool, None and finite floats")
+    return obj
+
+
+def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
+    """A deterministic ``.npz``: stored members, fixed dates and attributes, keys in order.
+
+    Parameters
+    ----------
+    arrays : mapping of str to ndarray
+        Member name (without ``.npy``) -> array; no object arrays.
+
+    Returns
+    -------
+    bytes
+        An uncompressed zip readable by ``np.load``; equal input gives equal bytes.
+
+    Examples
+    --------
+    >>> a = {"w": np.arange(3)}
+    >>> npz_bytes(a) == npz_bytes(a), read_npz(npz_bytes(a), Path("x.npz"))["w"].tolist()
+    (True, [0, 1, 2])
+    """
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as zf:
+        for key, array in arrays.items():
+            npy = io.BytesIO()
+            np.lib.format.write_array(npy, array, allow_pickle=False)
+            info = zipfile.ZipInfo(f"{key}.npy", date_time=_ZIP_DATE)
+            info.create_system, info.external_attr = 3, 0o644 << 16
+            zf.writestr(info, npy.getvalue())
+    return buffer.getvalue()
+
+
+def read_npz(raw: bytes, path: Path) -> dict[str, np.ndarray]:
+    """Every member of an in-memory ``.npz``, without pickle.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file's bytes.
+    path : Path
+        Where they came from (for messages).
+
+    Returns
+    -------
+    dict of str to ndarray
+
+    Raises
+    ------
+    ArtifactError
+        If ``raw`` is not a zip of plain ``.npy`` members.
+
+    Examples
+    --------
+    >>> read_npz(npz_bytes({"k": np.ones(2)}), Path("a.npz"))["k"].tolist()
+    [1.0, 1.0]
+    """
+    try:
+        with np.load(io.BytesIO(raw), allow_pickle=False) as npz:
+            return {key: npz[key] for key in npz.files}
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
+        raise ArtifactError(f"{path}: not a readable .npz of plain arrays ({exc})") from exc
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path.tmp``, then rename it over ``path``.
+
+    Parameters
+    ----------
+    path : Path
+    data : bytes
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written (the caller wraps it).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     write_atomic(Path(tmp) / "f", b"x")
+    ...     read_bytes(Path(tmp) / "f")
+    b'x'
+    """
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_bytes(data)
+    tmp.replace(path)
+
+
+def read_bytes(path: Path) -> bytes:
+    """The bytes of an artifact file.
+
+    Parameters
+    ----------
+    path : Path
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    ArtifactError
+        If the file is missing or unreadable.
+
+    Examples
+    --------
+    >>> read_bytes(Path("/nonexistent/manifest.json"))  # doctest: +IGNORE_EXCEPTION_DETAIL
+    Traceback (most recent call last):
+    ir.errors.ArtifactError: /nonexistent/manifest.json: cannot read (...); ...
+    """
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise ArtifactError(f"{path}: cannot read ({exc.strerror or exc}); is this an artifact "
+                            "directory written by backends.artifact.save?") from exc
