@@ -162,6 +162,17 @@ class MatrixDelivery:
                                     shape=(hit.size, self.n_in))
             one_hot.sum_duplicates()
             part = (one_hot @ weights).toarray()
+        elif ((values is not None or self.blas_events) and not self.integer
+              and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in):
+            # dense over the whole batch (the closed form's silent stage): one-hot over every
+            # row by one bincount (events added in order), one BLAS product, no sorting
+            n_rows = n_batch * self.n_reps
+            data = None if values is None else values.astype(dtype)
+            one_hot = np.bincount(rows * self.n_in + self.col_of[n], weights=data,
+                                  minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
+            block = (one_hot @ weights).astype(dtype, copy=False).reshape(n_batch,
+                                                                          *self.block_shape)
+            return block.transpose(0, *(1 + a for a in self.to_target))
         else:
             order = np.argsort(rows, kind="stable")
             rows, cols = rows[order], self.col_of[n[order]]
