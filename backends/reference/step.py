@@ -70,7 +70,6 @@ def run_step(
     n_steps = plan.network.n_steps
     pops = plan.populations
     size = {pid: pops[pid].size for pid in plan.order}
-    dtype = np.int64 if plan.integer else np.float64
     states = {pid: NeuronState.zeros((n_frames, size[pid]), plan.integer) for pid in plan.neurons}
     empty = np.zeros(0, np.int64)
     ring = {pid: [empty] * plan.history[pid] for pid in plan.order}
@@ -87,7 +86,7 @@ def run_step(
             else:
                 params = plan.neurons[pid]
                 take = bool(params.input_on[t])
-                current = np.zeros((n_frames, *pops[pid].dims), dtype) if take else 0
+                current = 0  # stays a scalar until some projection delivers
                 for qid in plan.incoming[pid]:
                     dl = plan.deliveries[qid]
                     for k, d in enumerate(dl.delays):
@@ -97,8 +96,8 @@ def run_step(
                         if ev.size:
                             events[qid] += dl.n_events(k, ev)
                             if take:
-                                current += dl.current(k, ev, n_frames)
-                if take:
+                                current = current + dl.current(k, ev, n_frames)
+                if take and not np.isscalar(current):
                     current = current.reshape(n_frames, size[pid])
                 spikes, states[pid] = neuron_step(states[pid], current, params, t)
                 fired = np.flatnonzero(spikes)
