@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 from test_ir_properties import _random_inputs, chains
 
@@ -19,6 +19,7 @@ from ir.evaluate import evaluate
        st.sampled_from([None, "unbounded", "loihi"]))
 def test_random_chains_compile_and_run_or_raise_a_typed_error(graph: Graph, seed: int,
                                                               target: str | None) -> None:
+    note(graph.to_yaml())
     inputs = _random_inputs(graph, np.random.default_rng(seed))
     try:
         program = compile_graph(graph, target=target, calibration_inputs=inputs, time_steps=32)

@@ -211,3 +211,20 @@ def test_spike_table_decoder() -> None:
     assert y.tolist() == [[9.0, 7.0], [5.0, 0.0]]
     with pytest.raises(ValueError, match="spike_table"):
         Decoder(port="t", population="a", kind="spike_table", t_ref=0.5, table=(1.0,))
+
+
+def test_fused_node_keeps_its_complex_type() -> None:
+    """A zero linear folded into a dft: the product has no imaginary part, yet the dft's output
+    (and every other surviving node's type) must not change (found by the compile property)."""
+    g = Graph.from_dict({"name": "z", "nodes": [
+        {"id": "x", "op": "adc_input", "shape": {"a": 4}},
+        {"id": "lin", "op": "linear", "input": "x", "axis": "a", "matrix": [[0.0] * 4]},
+        {"id": "f", "op": "dft", "input": "lin", "axis": "a"},
+        {"id": "o", "op": "output", "input": "f"}]})
+    fused = FuseLinear().apply(CompileContext(), CompiledProgram(graph=g)).graph
+    assert fused.op("f").op == "linear"
+    before, after = g.infer_types(), fused.infer_types()
+    assert all(after[n] == before[n] for n in after)
+    x = np.arange(4.0)
+    np.testing.assert_array_equal(evaluate(fused, {"x": x})["o"], evaluate(g, {"x": x})["o"])
+    assert np.iscomplexobj(evaluate(fused, {"x": x})["o"])

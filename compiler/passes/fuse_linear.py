@@ -53,10 +53,12 @@ _LINEAR = ("dft", "linear")
 
 
 def _linear_node(node_id: str, like: dict[str, Any], w: np.ndarray, axis: str,
-                 out_axis: str) -> dict[str, Any]:
+                 out_axis: str, *, complex_out: bool) -> dict[str, Any]:
+    """The ``linear`` node replacing ``node_id``; it keeps the replaced node's output type, so
+    a complex output stays complex even when the fused product has no imaginary part."""
     node = {"id": node_id, "op": "linear", "input": like["input"], "axis": axis,
             "out_axis": out_axis, "matrix": w.real.tolist()}
-    if np.any(w.imag != 0):
+    if complex_out or np.any(w.imag != 0):
         node["matrix_imag"] = w.imag.tolist()
     return node
 
@@ -106,7 +108,8 @@ class FuseLinear(Pass):
                 elif b["op"] == "linear":
                     w = op_weights(op_b, w_in.axes[in_axis], node=b_id) * taps[None, :]
                     new = _linear_node(b_id, dict(b, input=a["input"]), w, in_axis,
-                                       b.get("out_axis") or in_axis)
+                                       b.get("out_axis") or in_axis,
+                                       complex_out=types[b_id].complex)
                     rule = "window-into-linear"
                 else:
                     continue
@@ -123,7 +126,8 @@ class FuseLinear(Pass):
                 if after >= before:
                     continue
                 new = _linear_node(b_id, dict(b, input=a["input"]), w, a["axis"],
-                                   b.get("out_axis") or in_axis)
+                                   b.get("out_axis") or in_axis,
+                                   complex_out=types[b_id].complex)
                 self._replace(data, a, b, new, True)
                 record.append({"rule": "linear-chain", "into": b_id, "folded": a["id"],
                                "synapses_before": before, "synapses_after": after})
