@@ -14,9 +14,11 @@ Examples
 >>> g = Graph.from_dict({"name": "x", "nodes": [
 ...     {"id": "a", "op": "input", "shape": {"range": 4}},
 ...     {"id": "o", "op": "output", "input": "a"}]})
->>> program = compile_graph(g)
->>> [s.kind for s in program.segments], sorted(program.records["timings"])
-(['host'], ['calibrate', 'fuse-linear', 'lower', 'verify'])
+>>> program = compile_graph(g)                 # for loihi2, the default target
+>>> [s.kind for s in program.segments], list(program.records["timings"])[:4]
+(['host'], ['verify', 'fuse-linear', 'calibrate', 'lower'])
+>>> sorted(compile_graph(g, target=None).records["timings"])  # no allocation passes
+['calibrate', 'fuse-linear', 'lower', 'verify']
 """
 
 from __future__ import annotations
@@ -50,12 +52,13 @@ EXTRA_OPTIONS = {
     "headroom": "calibration headroom factor >= 1 (static policy)",
     "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
     "charging": "S-FT charging schedule: auto | constant | companding",
+    "stage_gains": "time-coded S-FT: per-bin gains between linear stages, auto | none",
     "fft_radices": "radix sequence of the time-fft motif",
     "input_range": "assumed max |input| of rate/fft motifs without calibration",
     "cfar_range": "{cfar node id: (lo, hi)} value range of the CFAR latency code",
     "cfar_quantiles": "quantiles of the calibration map that bound the CFAR code",
     "cfar_ties": "how the CFAR code resolves equal spike steps",
-    "long_delays": "quantize: 'error' or 'relay' for delays beyond the target's maximum",
+    "long_delays": "quantize: 'relay' (default) or 'error' for delays beyond the target's maximum",
     "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
     "frame_rate_hz": "report: frames per second (default from the chain or 10)",
     "real_bits": "report: bits per real sample of frame I/O (default 16)",
@@ -71,7 +74,7 @@ def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> l
     return passes
 
 
-def compile_graph(graph: Graph | str | Path, target: Any = None, *,
+def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
                   motifs: Mapping[str, str] | None = None, calibration: str = "static",
                   calibration_inputs: Mapping[str, np.ndarray] | None = None,
                   time_steps: int | None = None, weight_bits: int | None = None,
@@ -84,10 +87,11 @@ def compile_graph(graph: Graph | str | Path, target: Any = None, *,
     ----------
     graph : Graph or path
         The chain (a path is read with :meth:`ir.Graph.from_yaml`).
-    target : str, Path, HardwareProfile or None
+    target : str, Path, HardwareProfile or None, default "loihi2"
         A built-in profile name (``loihi``, ``loihi2``, ``spinnaker2``,
         ``unbounded``), a YAML profile path, a profile object, or None (no
-        allocation passes).
+        allocation passes: the spiking network and host segments only, for
+        accuracy studies where the chip does not matter).
     motifs : mapping, optional
         Motif per node id or op name (e.g. ``{"dft": "time", "mag": "host"}``).
     calibration : {"static", "per-input"}

@@ -138,7 +138,7 @@ def test_per_input_policy_normalises_each_chirp(motif):
          "keep": "positive"},
         {"id": "o", "op": "output", "input": "f"}]})
     steps = 2000 if motif == "rate" else 256
-    program = compile_graph(g, motifs={"dft": motif}, calibration="per-input",
+    program = compile_graph(g, None, motifs={"dft": motif}, calibration="per-input",
                             calibration_inputs={"x": x}, time_steps=steps)
     (net,) = program.networks
     assert net.encoders[0].normalize_axes == ("sample",)

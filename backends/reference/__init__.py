@@ -17,7 +17,7 @@ from backends.reference.closed import closed_form_problems
 from backends.reference.delivery import DELIVERY_BUILDERS, MatrixDelivery, StencilDelivery
 from backends.reference.neuron import NeuronState, StepParams, decay, neuron_step
 from backends.reference.plan import SimPlan, build_plan
-from backends.reference.program import ProgramResult, run_program
+from backends.reference.program import ProgramResult, program_plans, run_program
 from backends.reference.result import SimResult
 from backends.reference.simulate import RASTER_LIMIT_BYTES, simulate
 
@@ -35,6 +35,7 @@ __all__ = [
     "closed_form_problems",
     "decay",
     "neuron_step",
+    "program_plans",
     "run_program",
     "simulate",
 ]

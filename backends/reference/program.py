@@ -20,18 +20,19 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
 from ir.evaluate import EVAL_REGISTRY, check_input
 
-__all__ = ["ProgramResult", "run_program"]
+__all__ = ["ProgramResult", "program_plans", "run_program"]
 
 
 @dataclass(frozen=True)
@@ -52,9 +53,54 @@ class ProgramResult:
     outputs: dict[str, np.ndarray]
     simulations: list[SimResult] = field(default_factory=list)
 
+    @property
+    def spike_counts(self) -> dict[str, int]:
+        """Spikes per population of every spiking segment (population ids are unique)."""
+        return {k: v for s in self.simulations for k, v in s.spike_counts.items()}
+
+    @property
+    def synaptic_events(self) -> dict[str, int]:
+        """Synaptic events per projection of every spiking segment."""
+        return {k: v for s in self.simulations for k, v in s.synaptic_events.items()}
+
+    @property
+    def total_spikes(self) -> int:
+        """Spikes of every population of every segment."""
+        return sum(s.total_spikes for s in self.simulations)
+
+    @property
+    def total_synaptic_events(self) -> int:
+        """Synaptic events of every projection of every segment."""
+        return sum(s.total_synaptic_events for s in self.simulations)
+
+    @property
+    def mode(self) -> str:
+        """The engines that ran, e.g. ``"closed"`` or ``"closed+step"`` (``"host"`` if none)."""
+        return "+".join(dict.fromkeys(s.mode for s in self.simulations)) or "host"
+
+    def summary(self) -> str:
+        """A short report: per spiking segment its :meth:`SimResult.summary`, then the outputs."""
+        lines = [f"program run: {len(self.simulations)} spiking segment(s), mode={self.mode}, "
+                 f"spikes={self.total_spikes} synaptic_events={self.total_synaptic_events}"]
+        for i, s in enumerate(self.simulations):
+            lines.append(f"segment {i}: " + s.summary().replace("\n", "\n  "))
+        lines += [f"output {k}: shape {v.shape}" for k, v in self.outputs.items()]
+        return "\n".join(lines)
+
+
+def program_plans(program: CompiledProgram, arithmetic: str = "float64") -> list[SimPlan]:
+    """One :class:`SimPlan` per spiking segment, to reuse over many frames with ``plans=``.
+
+    Building a plan (index maps, stencil edges, delay classes) costs about as much
+    as simulating one frame in closed form; a caller running many frames builds
+    the plans once.
+    """
+    return [build_plan(net, arithmetic) for net in program.networks]
+
 
 def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
-                mode: str = "auto", arithmetic: str = "float64") -> ProgramResult:
+                mode: str = "auto", arithmetic: str = "float64", record_spikes: bool = False,
+                plans: Sequence[SimPlan] | None = None) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
     Parameters
@@ -65,6 +111,10 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         One array per input node id, of the node's declared shape.
     mode, arithmetic : str
         Passed to :func:`backends.reference.simulate` for every spiking segment.
+    record_spikes : bool
+        Keep spike rasters (see :func:`~backends.reference.simulate`).
+    plans : sequence of SimPlan, optional
+        :func:`program_plans` of this program, built once for many runs.
 
     Raises
     ------
@@ -81,10 +131,14 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                               f"{sorted(missing)}, unknown {sorted(extra)})")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
     sims = []
+    if plans is not None and len(plans) != len(program.networks):
+        raise SimulationError(f"program {graph.name!r}: {len(plans)} plans given for "
+                              f"{len(program.networks)} spiking segments; use program_plans()")
     for seg in program.segments:
         if seg.kind == "spiking":
+            plan = None if plans is None else plans[len(sims)]
             result = simulate(seg.network, {p: values[p] for p in seg.inputs}, mode=mode,
-                              arithmetic=arithmetic)
+                              arithmetic=arithmetic, record_spikes=record_spikes, plan=plan)
             values.update(result.outputs)
             sims.append(result)
         else:

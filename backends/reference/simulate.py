@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,10 @@ from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
 
+if TYPE_CHECKING:
+    from backends.reference.program import ProgramResult
+    from compiler.program import CompiledProgram
+
 __all__ = ["simulate", "ENGINES", "RASTER_LIMIT_BYTES"]
 
 #: Default cap on recorded spike rasters (bytes).
@@ -25,7 +30,7 @@ ENGINES: dict[str, Callable[..., Activity]] = {"step": run_step, "closed": run_c
 
 
 def simulate(
-    network: SpikingNetwork,
+    network: SpikingNetwork | CompiledProgram,
     inputs: Mapping[str, np.ndarray],
     *,
     mode: str = "step",
@@ -33,13 +38,16 @@ def simulate(
     record_spikes: bool = False,
     raster_limit_bytes: int = RASTER_LIMIT_BYTES,
     plan: SimPlan | None = None,
-) -> SimResult:
-    """Simulate a spiking network on a batch of inputs.
+) -> SimResult | ProgramResult:
+    """Simulate a spiking network (or a whole compiled program) on a batch of inputs.
 
     Parameters
     ----------
-    network : SpikingNetwork
-        The network (validated here).
+    network : SpikingNetwork or CompiledProgram
+        The network (validated here), or a whole compiled program: then the
+        call is :func:`~backends.reference.program.run_program` and returns its
+        :class:`~backends.reference.program.ProgramResult` (decoded values by
+        IR node id, spike and synaptic-event counts of every segment).
     inputs : mapping of port to ndarray
         One array per encoder port, of the port's value shape (the source
         population's shape without the ``part`` axis a split adds), or with one
@@ -102,6 +110,16 @@ def simulate(
     >>> r.mode, r.outputs["t"].tolist(), r.synaptic_events
     ('closed', [2.0], {'w': 2})
     """
+    from compiler.program import CompiledProgram
+
+    if isinstance(network, CompiledProgram):  # a whole chain: spiking and host segments
+        from backends.reference.program import run_program
+
+        if plan is not None:
+            raise SimulationError("a compiled program takes plans=program_plans(program) in "
+                                  "run_program(), not plan=")
+        return run_program(network, inputs, mode=mode, arithmetic=arithmetic,
+                           record_spikes=record_spikes)
     if mode not in (*ENGINES, "auto"):
         raise SimulationError(f"network {network.name!r}: mode {mode!r} is not one of "
                               f"{(*ENGINES, 'auto')}")

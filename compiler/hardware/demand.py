@@ -46,7 +46,6 @@ from math import prod
 
 import numpy as np
 import scipy.sparse as sp
-from scipy import signal
 
 from compiler.snn import MatrixProjection, Population, SpikingNetwork, StencilProjection
 
@@ -193,6 +192,8 @@ def stencil_degree_map(proj: StencilProjection, pop: Population, *, incoming: bo
         widths = [(0, 0)] * inside.ndim
         widths[ax] = width
         inside = np.pad(inside, widths, mode="wrap" if edge == "wrap" else "constant")
+    from scipy import signal  # imported here: scipy.signal takes ~1 s to import
+
     op = signal.correlate if incoming else signal.convolve
     return np.rint(op(inside, mask, mode="valid")).astype(np.int64)
 

@@ -287,12 +287,13 @@ class Quantize(Pass):
 
     Attributes
     ----------
-    long_delays : {"error", "relay"}
-        What to do with delays beyond the target's maximum.
+    long_delays : {"relay", "error"}
+        What to do with delays beyond the target's maximum (default: relay them,
+        so a chain compiles for any target with delays; ``error`` to be told).
     """
 
     name: ClassVar[str] = "quantize"
-    long_delays: LongDelays = "error"
+    long_delays: LongDelays = "relay"
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)

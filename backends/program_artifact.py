@@ -1,0 +1,226 @@
+r"""A whole :class:`~compiler.program.CompiledProgram` on disk: its graph, segments and networks.
+
+A program artifact is a directory::
+
+    program.json          graph, segments, options, target profile, report (strict JSON)
+    report.md             the resource report for people (not read back)
+    networks/0/ …         one spiking-network artifact per spiking segment (backends.artifact)
+
+``program.json`` is written like a network manifest (sorted keys, ASCII, two-space
+indent) with a SHA-256 of its canonical form and the ``manifest_sha256`` of every
+network it refers to, so an edit to any file of the directory is refused on
+:func:`load_program`.  Equal programs give byte-identical directories.  Loading
+never runs code: JSON through :mod:`json`, the graph through
+:meth:`ir.Graph.from_dict` (pydantic-validated ops), networks through
+:func:`backends.artifact.load`.
+
+Examples
+--------
+>>> import tempfile
+>>> import numpy as np
+>>> from compiler.compile import compile_graph
+>>> from ir import Graph
+>>> g = Graph.from_dict({"name": "x", "nodes": [
+...     {"id": "a", "op": "input", "shape": {"range": 3}},
+...     {"id": "m", "op": "magnitude", "input": "a", "kind": "square"},
+...     {"id": "o", "op": "output", "input": "m"}]})
+>>> with tempfile.TemporaryDirectory() as tmp:
+...     back = load_program(save_program(compile_graph(g), tmp))
+>>> [s.kind for s in back.segments], back.target.name, back.graph == g
+(['host', 'host'], 'loihi2', True)
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+
+from backends.artifact import _radarsnn_version, load, read_manifest, save
+from backends.artifact_io import canonical_json, plain_json, read_bytes, render_json, sha256_hex
+from backends.artifact_io import write_atomic as _write
+from compiler.program import CompiledProgram, Segment
+from ir import Graph
+from ir.errors import ArtifactError, RadarSNNError
+
+__all__ = ["PROGRAM_FILE", "PROGRAM_FORMAT", "PROGRAM_VERSION", "is_program", "load_program",
+           "read_program_manifest", "save_program"]
+
+#: The program manifest's file name.
+PROGRAM_FILE = "program.json"
+#: Format name written into every program manifest.
+PROGRAM_FORMAT = "radarsnn.program"
+#: ``MAJOR.MINOR`` of the program format this module writes (and the major it reads).
+PROGRAM_VERSION = "1.0"
+_HASH_KEY = "manifest_sha256"
+
+
+def is_program(directory: str | Path) -> bool:
+    """Whether ``directory`` holds a program artifact (rather than one network's).
+
+    Examples
+    --------
+    >>> is_program("/nonexistent")
+    False
+    """
+    return (Path(directory) / PROGRAM_FILE).is_file()
+
+
+def _segment_entry(seg: Segment, digests: list[str]) -> dict:
+    entry = {"kind": seg.kind, "inputs": list(seg.inputs), "outputs": list(seg.outputs)}
+    if seg.kind == "spiking":
+        entry["network"] = {"path": f"networks/{len(digests) - 1}",
+                            "manifest_sha256": digests[-1]}
+    else:
+        entry["node"] = seg.node
+    return entry
+
+
+def save_program(program: CompiledProgram, directory: str | Path, *,
+                 extra: Mapping | None = None) -> Path:
+    """Write ``program`` as a program artifact directory (created if needed).
+
+    Parameters
+    ----------
+    program : CompiledProgram
+        What :func:`compiler.compile.compile_graph` returned.
+    directory : str or Path
+        The artifact directory; its ``program.json``, ``report.md`` and
+        ``networks/`` are replaced.
+    extra : mapping, optional
+        Caller's JSON data stored under ``extra``.
+
+    Returns
+    -------
+    Path
+        ``directory``.
+
+    Raises
+    ------
+    ArtifactError
+        Options, report or ``extra`` that are not plain JSON, or a file that
+        cannot be written.
+    """
+    folder = Path(directory)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ArtifactError(f"cannot create the program artifact folder {folder}: {exc}") from exc
+    digests: list[str] = []
+    segments = []
+    for seg in program.segments:
+        if seg.kind == "spiking":
+            net_dir = save(seg.network, folder / "networks" / str(len(digests)))
+            digests.append(read_manifest(net_dir)[_HASH_KEY])
+        segments.append(_segment_entry(seg, digests))
+    report = program.records.get("report")
+    report_data = None if report is None else json.loads(report.to_json())
+    target = program.target
+    body = {
+        "format": PROGRAM_FORMAT,
+        "format_version": PROGRAM_VERSION,
+        "radarsnn_version": _radarsnn_version(),
+        "graph": plain_json(program.graph.to_dict(), "graph"),
+        "segments": segments,
+        "options": plain_json(_jsonable(program.options), "compile options"),
+        "target": None if target is None else plain_json(target.model_dump(mode="json"),
+                                                          "target profile"),
+        "report": plain_json(report_data, "report"),
+        "extra": plain_json(dict(extra or {}), "extra"),
+    }
+    manifest = {**body, _HASH_KEY: sha256_hex(canonical_json(body))}
+    try:
+        _write(folder / PROGRAM_FILE, render_json(manifest))
+        if report is not None:
+            _write(folder / "report.md", report.to_markdown().encode("utf-8"))
+    except OSError as exc:
+        raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
+    return folder
+
+
+def _jsonable(options: Mapping) -> dict:
+    """Compile options with tuples as lists (JSON has no tuples)."""
+    return json.loads(json.dumps(dict(options), default=list))
+
+
+def read_program_manifest(directory: str | Path) -> dict:
+    """The checked ``program.json`` of a program artifact (format, version, canonical, digest)."""
+    path = Path(directory) / PROGRAM_FILE
+    raw = read_bytes(path)
+    try:
+        manifest = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ArtifactError(f"{path}: not valid UTF-8 JSON ({exc})") from exc
+    if not isinstance(manifest, dict) or manifest.get("format") != PROGRAM_FORMAT:
+        raise ArtifactError(f"{path}: not a radarsnn program manifest (format "
+                            f"{manifest.get('format') if isinstance(manifest, dict) else None!r})")
+    version = str(manifest.get("format_version", ""))
+    if version.split(".")[0] != PROGRAM_VERSION.split(".")[0]:
+        raise ArtifactError(f"{path}: program format {version!r}, this radarsnn "
+                            f"({_radarsnn_version()}) reads {PROGRAM_VERSION.split('.')[0]}.x; "
+                            "re-compile the chain with this radarsnn")
+    try:
+        canonical = render_json(manifest) == raw
+    except ValueError:
+        canonical = False
+    body = {k: v for k, v in manifest.items() if k != _HASH_KEY}
+    if not canonical or manifest.get(_HASH_KEY) != sha256_hex(canonical_json(body)):
+        raise ArtifactError(f"{path}: modified after it was written (not canonical or digest "
+                            "mismatch); re-compile the chain")
+    return manifest
+
+
+def load_program(directory: str | Path) -> CompiledProgram:
+    """Read and check a program artifact written by :func:`save_program`.
+
+    Returns
+    -------
+    CompiledProgram
+        Graph, segments (networks loaded and validated), options, target, and
+        ``records["report"]`` when the program had a report.
+
+    Raises
+    ------
+    ArtifactError
+        A missing, edited or truncated file, another format or major version,
+        a network whose digest differs from the one recorded, or a graph or
+        profile that does not parse (the message names the file).
+    """
+    from compiler.hardware import HardwareProfile
+    from compiler.report import Report
+
+    folder = Path(directory)
+    manifest = read_program_manifest(folder)
+    path = folder / PROGRAM_FILE
+    try:
+        graph = Graph.from_dict(manifest["graph"])
+        graph.verify()
+        segments = []
+        for entry in manifest["segments"]:
+            if entry["kind"] == "spiking":
+                ref = entry["network"]
+                net_dir = folder / ref["path"]
+                if net_dir.resolve().parent != (folder / "networks").resolve():
+                    raise ArtifactError(f"{path}: network path {ref['path']!r} leaves the "
+                                        "artifact's networks/ folder")
+                if read_manifest(net_dir)[_HASH_KEY] != ref["manifest_sha256"]:
+                    raise ArtifactError(f"{net_dir}: not the network this program was saved "
+                                        "with (digest differs); re-compile the chain")
+                segments.append(Segment(kind="spiking", inputs=list(entry["inputs"]),
+                                        outputs=list(entry["outputs"]), network=load(net_dir)))
+            elif entry["kind"] == "host":
+                segments.append(Segment(kind="host", inputs=list(entry["inputs"]),
+                                        outputs=list(entry["outputs"]), node=str(entry["node"])))
+            else:
+                raise ArtifactError(f"{path}: unknown segment kind {entry['kind']!r}")
+        target = manifest["target"]
+        profile = None if target is None else HardwareProfile(**target)
+    except ArtifactError:
+        raise
+    except RadarSNNError as exc:
+        raise ArtifactError(f"{path}: the stored program is invalid: {exc}", node=exc.node) from exc
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ArtifactError(f"{path}: malformed entry ({type(exc).__name__}: {exc})") from exc
+    records = {} if manifest["report"] is None else {"report": Report(manifest["report"])}
+    return CompiledProgram(graph=graph, segments=segments, options=dict(manifest["options"]),
+                           records=records, target=profile)

@@ -1,0 +1,123 @@
+"""``radarsnn compile`` / ``run`` / ``report`` on program artifacts; the CLI error contract."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backends import load, save
+from backends.reference import run_program, simulate
+from compiler import compile_graph
+from compiler.cli import main
+from ir import Graph
+from ir.errors import ArtifactError
+
+CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
+TI = CHAINS / "ti_range.yaml"
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory):
+    out = tmp_path_factory.mktemp("art") / "ti"
+    assert main(["compile", str(TI), "--target", "loihi2", "-o", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_compile_writes_a_program_artifact_that_runs(compiled, tmp_path, capsys):
+    names = sorted(p.name for p in compiled.iterdir())
+    assert names == ["networks", "program.json", "report.md"]
+    program = load(compiled)
+    assert [s.kind for s in program.segments][0] == "spiking" and program.target.name == "loihi2"
+    rng = np.random.default_rng(0)
+    x = np.cos(2 * np.pi * 40 * np.arange(1024) / 1024) + 0.01 * rng.standard_normal(1024)
+    np.save(tmp_path / "x.npy", x)
+    assert main(["run", str(compiled), "-i", str(tmp_path / "x.npy"), "--json",
+                 "-o", str(tmp_path / "y.npz")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["outputs"] == {"out": [512]} and doc["spikes"] > 0
+    direct = run_program(program, {"chirp": x}).outputs["out"]
+    np.testing.assert_array_equal(np.load(tmp_path / "y.npz")["out"], direct)
+    assert direct[40] == 1.0  # the tone's bin is detected
+    via_simulate = simulate(program, {"chirp": x})
+    np.testing.assert_array_equal(via_simulate.outputs["out"], direct)
+    assert via_simulate.total_spikes == doc["spikes"]
+
+
+def test_same_chain_gives_byte_identical_artifacts(compiled, tmp_path):
+    again = tmp_path / "again"
+    assert main(["compile", str(TI), "-o", str(again), "--quiet"]) == 0
+    for a in sorted(p for p in compiled.rglob("*") if p.is_file()):
+        b = again / a.relative_to(compiled)
+        assert a.read_bytes() == b.read_bytes(), a.name
+
+
+def test_report_reads_a_compiled_artifact(compiled, capsys):
+    assert main(["report", str(compiled), "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["target"] == "loihi2" and doc["totals"]["neurons"] > 0
+
+
+def test_compile_json_summary(tmp_path, capsys):
+    assert main(["compile", str(TI), "-o", str(tmp_path / "a"), "--json",
+                 "--option", "headroom=1.5", "-m", "dft=rate"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["target"] == "loihi2" and doc["segments"][0] == "spiking"
+    assert load(tmp_path / "a").options["headroom"] == 1.5
+
+
+def test_an_edited_program_artifact_is_refused(compiled, tmp_path):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(compiled, copy)
+    manifest = copy / "program.json"
+    manifest.write_text(manifest.read_text().replace('"loihi2"', '"loihi"', 1))
+    with pytest.raises(ArtifactError, match="program.json"):
+        load(copy)
+    shutil.rmtree(copy)
+    shutil.copytree(compiled, copy)
+    arrays = copy / "networks" / "0" / "arrays.npz"
+    raw = bytearray(arrays.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF
+    arrays.write_bytes(bytes(raw))
+    with pytest.raises(ArtifactError, match="arrays.npz"):
+        load(copy)
+
+
+def test_save_dispatches_on_programs(tmp_path):
+    g = Graph.from_dict({"name": "x", "nodes": [
+        {"id": "a", "op": "input", "shape": {"range": 3}},
+        {"id": "o", "op": "output", "input": "a"}]})
+    program = compile_graph(g, target=None)
+    back = load(save(program, tmp_path / "p"))
+    assert back.target is None and back.graph == g and back.records == {}
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["compile", "nope.yaml", "-o", "x"], "nope.yaml"),
+    (["run", "missing_dir", "-i", "x.npy"], "missing_dir"),
+    (["compile", str(TI), "-o", "x", "--target", "no-such-chip"], "no-such-chip"),
+    (["compile", str(TI), "-o", "x", "--option", "bogus=1"], "bogus"),
+    (["compile", str(TI), "-o", "x", "--motif", "dft"], "NODE_OR_OP=MOTIF"),
+])
+def test_errors_are_one_line_without_traceback(argv, needle, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and needle in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_json_errors_are_json(capsys, tmp_path):
+    assert main(["compile", str(tmp_path / "nope.yaml"), "-o", str(tmp_path / "x"),
+                 "--json"]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    assert "nope.yaml" in doc["error"] and doc["type"]
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    with pytest.raises(Exception, match="nope"):
+        main(["--debug", "validate", str(tmp_path / "nope.yaml")])
