@@ -22,7 +22,7 @@ from typing import Any
 from ir import Graph
 from radar.config import RadarConfig
 
-__all__ = ["range_doppler_chain", "DEFAULT_CFAR"]
+__all__ = ["DEFAULT_CFAR", "range_chain", "range_doppler_chain"]
 
 #: The demo's detector: 2-D OS-CFAR on the power map, guard 3/2 and training 8/4 cells per side
 #: along range/Doppler (N = 23·13 − 7·5 = 264 training cells), the k = 198 ≈ ¾N-th largest as the
@@ -79,5 +79,44 @@ def range_doppler_chain(config: RadarConfig, *, window: str = "hann",
         {"id": "out", "op": "output", "input": "det"},
     ]
     graph = Graph.from_dict({"name": name or f"{config.name}-rd-cfar", "nodes": nodes})
+    graph.verify()
+    return graph
+
+
+def range_chain(config: RadarConfig, *, window: str = "hann", rx: int | None = None,
+                name: str | None = None) -> Graph:
+    """The 1D chain ADC cube → window → range DFT → output (the range S-FT stage alone).
+
+    Parameters
+    ----------
+    config : RadarConfig
+        The sensor (cube shape, real/IQ sampling).
+    window : str
+        Range window kind.
+    rx : int, optional
+        Keep only this many (virtual) receivers (default: all).
+    name : str, optional
+        Chain name (default ``<config name>-range``).
+
+    Returns
+    -------
+    Graph
+        Node ids ``adc, win, rng, out``.
+
+    Examples
+    --------
+    >>> from radar.config import preset
+    >>> dict(range_chain(preset("carrada"), rx=1).infer_types()["rng"].axes)
+    {'rx': 1, 'chirp': 64, 'range': 256}
+    """
+    shape = {"rx": rx or config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
+    nodes = [
+        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq)},
+        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
+        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
+         "keep": "all" if config.iq else "positive"},
+        {"id": "out", "op": "output", "input": "rng"},
+    ]
+    graph = Graph.from_dict({"name": name or f"{config.name}-range", "nodes": nodes})
     graph.verify()
     return graph

@@ -18,23 +18,24 @@ CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
 
 @pytest.mark.parametrize("name", ["seed003", "carrada"])
 def test_demo_finds_every_target_without_false_alarms(name):
-    scene = run_demo(seed=0, presets=[name]).scenes[0]
+    scene = run_demo(seed=0, presets=[name], spiking=False).scenes[0]
     assert scene.n_found == scene.n_targets
     assert scene.n_false == 0
 
 
 def test_demo_prints_a_table_and_json(capsys):
-    assert main(["demo", "--preset", "carrada"]) == 0
+    assert main(["demo", "--preset", "carrada", "--conventional-only", "--no-figures"]) == 0
     out = capsys.readouterr().out
     assert "found 4/4 targets" in out and "aliased Doppler" in out
-    assert main(["demo", "--preset", "carrada", "--json"]) == 0
+    assert main(["demo", "--preset", "carrada", "--json", "--conventional-only",
+                 "--no-figures"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["scenes"][0]["preset"] == "carrada"
 
 
 def test_validate_accepts_the_examples(capsys):
     paths = sorted(str(p) for p in CHAINS.glob("*.yaml"))
-    assert len(paths) == 3
+    assert len(paths) >= 3
     assert main(["validate", *paths]) == 0
     assert "is valid" in capsys.readouterr().out
 

@@ -1,0 +1,87 @@
+"""The ``radarsnn`` command line.
+
+Sub-commands live in small modules, each with an ``add_parsers(subparsers)``
+function, collected explicitly in :data:`COMMAND_MODULES`:
+
+* :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``, ``run``;
+* :mod:`compiler.cli.demo` — ``demo``, ``bench``;
+* :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``.
+
+Errors from the project's hierarchy (and unreadable files) are printed as one
+line ``error: …`` on stderr with exit status 2 — as a JSON object on stdout
+with ``--json`` — and no traceback unless ``--debug`` is given.
+
+Examples
+--------
+>>> main(["schema"]) == 0  # doctest: +ELLIPSIS
+{...
+True
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from importlib import import_module
+
+from ir.errors import RadarSNNError
+
+__all__ = ["COMMAND_MODULES", "build_parser", "main"]
+
+#: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
+COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.demo", "backends.emit.command")
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("radarsnn")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``radarsnn`` command."""
+    parser = argparse.ArgumentParser(
+        prog="radarsnn",
+        description="Compile automotive-radar DSP chains into spiking neural networks.")
+    parser.add_argument("--version", action="version", version=f"radarsnn {_version()}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an error")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        import_module(name).add_parsers(sub)
+    return parser
+
+
+def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
+    message = str(err)
+    if isinstance(err, OSError) and not isinstance(err, RadarSNNError):
+        message = f"{err.strerror or err}: {err.filename}" if err.filename else str(err)
+    if args is not None and getattr(args, "json", False):
+        print(json.dumps({"error": message, "type": type(err).__name__,
+                          "node": getattr(err, "node", None)}, sort_keys=True))
+    else:
+        print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 on an error, 1 on a failed check)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (RadarSNNError, OSError) as err:
+        if args.debug:
+            raise
+        return _error_exit(err, args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,262 @@
+"""Chain sub-commands: ``validate``, ``schema``, ``compile``, ``report``, ``run``.
+
+``compile`` turns a chain file into a program artifact directory (see
+:mod:`backends.program_artifact`); ``run`` simulates a program or network
+artifact on ``.npy`` inputs; ``report`` prints what a chain (or a compiled
+artifact) costs on a target.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from ir.errors import RadarSNNError
+
+__all__ = ["add_parsers", "load_arrays", "parse_options"]
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from ir import Graph
+
+    for path in args.chains:
+        graph = Graph.from_yaml(path)
+        graph.verify()
+        types = graph.infer_types()
+        if args.json:
+            print(json.dumps({"chain": str(path), "name": graph.name, "ok": True,
+                              "nodes": len(types)}))
+            continue
+        print(f"{path}: chain {graph.name!r} is valid ({len(types)} nodes)")
+        for node_id in graph.topological_order():
+            t = types[node_id]
+            axes = " × ".join(f"{a}:{n}" for a, n in t.axes.items())
+            kind = "complex" if t.complex else "real"
+            print(f"  {node_id:<12} {graph.op(node_id).op:<12} [{axes}] {kind} {t.domain}")
+    return 0
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from ir import chain_schema
+
+    text = json.dumps(chain_schema(), indent=2, sort_keys=True)
+    if args.output:
+        Path(args.output).write_text(text + "\n", encoding="utf-8")
+    else:
+        print(text)
+    return 0
+
+
+def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
+    """``[PORT=]FILE.npy`` arguments → arrays by port (a bare file needs exactly one port).
+
+    Raises
+    ------
+    RadarSNNError
+        An unknown port, a bare file with several ports, or a file that is not
+        a readable ``.npy`` array (pickled object arrays are refused).
+    """
+    import numpy as np
+
+    arrays = {}
+    for item in items:
+        port, sep, path = item.rpartition("=")
+        if not sep:
+            if len(ports) != 1:
+                raise RadarSNNError(f"{what} has input ports {ports}; name one as PORT=FILE.npy "
+                                    f"(got {item!r})")
+            port, path = ports[0], item
+        if port not in ports:
+            raise RadarSNNError(f"{what} has no input port {port!r}; its ports are {ports}")
+        try:
+            arrays[port] = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as err:
+            raise RadarSNNError(f"cannot read input {path!r} for port {port!r}: {err}") from None
+    return arrays
+
+
+def parse_options(items: list[str] | None) -> dict:
+    """``KEY=VALUE`` compile options, each VALUE read as YAML (``headroom=1.5``, ``x=[1,2]``).
+
+    Examples
+    --------
+    >>> parse_options(["headroom=1.5", "cfar_ties=exact", "fft_radices=[4, 4]"])
+    {'headroom': 1.5, 'cfar_ties': 'exact', 'fft_radices': [4, 4]}
+    """
+    import yaml
+
+    options = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise RadarSNNError(f"option {item!r} is not KEY=VALUE (e.g. headroom=1.5)")
+        try:
+            options[key] = yaml.safe_load(value)
+        except yaml.YAMLError as err:
+            raise RadarSNNError(f"option {key!r}: value {value!r} is not YAML ({err})") from None
+    return options
+
+
+def _compile(args: argparse.Namespace, target: str | None):
+    """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
+    from compiler.calibration import synthetic_inputs
+    from compiler.compile import compile_graph, default_pipeline
+    from compiler.progress import make_progress
+    from ir import Graph
+
+    graph = Graph.from_yaml(args.chain)
+    if args.calibration:
+        calibration = load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}")
+        note = "calibrated on the given inputs"
+    else:
+        calibration = synthetic_inputs(graph, seed=0)
+        note = ("calibrated on synthetic noise (resources are exact; pass --calibration for "
+                "thresholds that mean something on radar data)")
+    motifs = {}
+    for m in args.motif or []:
+        key, sep, value = m.partition("=")
+        if not sep:
+            raise RadarSNNError(f"--motif {m!r} is not NODE_OR_OP=MOTIF (e.g. dft=time-fft)")
+        motifs[key] = value
+    options = parse_options(getattr(args, "option", None))
+    if getattr(args, "repetitions", None):
+        options["repetitions"] = args.repetitions
+    n_passes = len(default_pipeline(options, hardware=target is not None))
+    progress = make_progress(args.quiet or args.json, total=n_passes, desc="compile")
+    try:
+        program = compile_graph(graph, target=target, motifs=motifs,
+                                calibration_inputs=calibration, time_steps=args.time_steps,
+                                weight_bits=getattr(args, "weight_bits", None),
+                                progress=progress, options=options)
+    finally:
+        getattr(progress, "close", lambda: None)()
+    return program, note
+
+
+def _cmd_compile(args: argparse.Namespace) -> int:
+    from backends import save_program
+
+    program, note = _compile(args, args.target)
+    folder = save_program(program, args.output, extra={"chain_file": str(args.chain),
+                                                        "calibration": note})
+    report = program.records.get("report")
+    totals = report.data["totals"] if report is not None else {}
+    segments = [s.kind if s.kind == "spiking" else f"host:{s.node}" for s in program.segments]
+    if args.json:
+        print(json.dumps({"artifact": str(folder), "chain": program.graph.name,
+                          "target": program.target.name, "segments": segments,
+                          "totals": totals}, sort_keys=True, default=str))
+        return 0
+    if not args.quiet:
+        print(f"compiled chain {program.graph.name!r} for {program.target.name} into {folder}/")
+        print(f"  segments: {' → '.join(segments)}")
+        if totals:
+            print("  " + ", ".join(f"{k} {v:,}" for k, v in totals.items()
+                                   if isinstance(v, int)))
+        print(f"  {note}; full report: {folder / 'report.md'}")
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from backends import is_program, load_program
+
+    if Path(args.chain).is_dir():
+        if not is_program(args.chain):
+            raise RadarSNNError(f"{args.chain} is a directory but not a program artifact "
+                                "(no program.json); give a chain file or `radarsnn compile` output")
+        program, note = load_program(args.chain), "from the compiled artifact"
+    else:
+        program, note = _compile(args, args.target)
+    report = program.records.get("report")
+    if report is None:
+        raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
+    if args.core_map:
+        report.save_core_map(args.core_map)
+    if args.format == "json" or args.json:
+        print(report.to_json())
+    else:
+        print(report.to_markdown())
+        print(f"\n_{note}._")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from backends import is_program, load
+    from backends.reference import simulate
+
+    loaded = load(args.artifact)
+    if is_program(args.artifact):
+        ports = loaded.graph.input_ids()
+    else:
+        ports = [e.port for e in loaded.encoders]
+    inputs = load_arrays(args.input, ports, f"artifact {args.artifact}")
+    result = simulate(loaded, inputs, mode=args.mode)
+    if args.output:
+        np.savez(args.output, **{k: np.asarray(v) for k, v in result.outputs.items()})
+    if args.json:
+        print(json.dumps({"mode": result.mode, "spikes": result.total_spikes,
+                          "synaptic_events": result.total_synaptic_events,
+                          "spike_counts": result.spike_counts,
+                          "outputs": {k: list(np.shape(v)) for k, v in result.outputs.items()}},
+                         sort_keys=True))
+    elif not args.quiet:
+        print(result.summary())
+    return 0
+
+
+def _compile_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("chain", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("--target", "-t", default="loihi2",
+                   help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file "
+                        "(default loihi2)")
+    p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
+                   help="calibration input per input node (default: synthetic noise)")
+    p.add_argument("--motif", "-m", action="append", metavar="NODE_OR_OP=MOTIF",
+                   help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
+    p.add_argument("--time-steps", type=int, help="override the per-motif time window")
+    p.add_argument("--option", action="append", metavar="KEY=VALUE",
+                   help="compile option (see docs/compiler.md), VALUE read as YAML")
+    p.add_argument("--repetitions", choices=["auto", "spatial", "temporal"],
+                   help="repeated stages: unrolled (spatial), one instance run R times per "
+                        "frame (temporal), or spatial where it fits (auto, default)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+
+
+def add_parsers(sub) -> None:
+    """Add ``validate``, ``schema``, ``compile``, ``report`` and ``run`` to ``sub``."""
+    p = sub.add_parser("validate", help="check chain files and print their inferred types")
+    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("--json", action="store_true", help="one JSON line per chain")
+    p.set_defaults(func=_cmd_validate)
+
+    p = sub.add_parser("schema", help="print the JSON schema of chain files")
+    p.add_argument("-o", "--output", help="write the schema to this file instead")
+    p.set_defaults(func=_cmd_schema)
+
+    p = sub.add_parser("compile", help="compile a chain for a target into an artifact directory")
+    _compile_arguments(p)
+    p.add_argument("--weight-bits", type=int, help="quantize weights to this many bits")
+    p.add_argument("--output", "-o", type=Path, required=True, metavar="DIR",
+                   help="the artifact directory to write")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.set_defaults(func=_cmd_compile)
+
+    p = sub.add_parser("report", help="what a chain (or a compiled artifact) costs on a target")
+    _compile_arguments(p)
+    p.add_argument("--format", choices=["md", "json"], default="md")
+    p.add_argument("--json", action="store_true", help="same as --format json")
+    p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
+    p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser("run", help="simulate a compiled artifact on .npy inputs")
+    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
+    p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]X.npy",
+                   help="input array per port (repeat for several ports)")
+    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
+    p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.add_argument("--quiet", "-q", action="store_true", help="print nothing")
+    p.set_defaults(func=_cmd_run)

@@ -1,0 +1,36 @@
+"""The demo's spiking chain: compiled for loihi2, simulated, scored, drawn."""
+
+from __future__ import annotations
+
+import json
+
+from compiler.cli import main
+from compiler.demo import run_demo
+
+
+def test_carrada_spiking_demo_finds_the_targets_and_writes_figures(tmp_path):
+    report = run_demo(seed=0, presets=["carrada"], out_dir=tmp_path)
+    scene = report.scenes[0]
+    assert scene.target == "loihi2"
+    assert scene.spiking_n_found == scene.n_targets == 4
+    assert scene.spiking_n_false <= 1
+    assert scene.cell_precision >= 0.95 and scene.cell_sensitivity >= 0.6
+    assert scene.sft_rmse < 0.01
+    assert scene.resources["cores"] > 0 and scene.resources["neurons"] > 0
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["cores_carrada.png", "rd_carrada.png", "report_carrada.md",
+                     "spikes_carrada.png", "summary.md"]
+    assert all((tmp_path / n).stat().st_size > 200 for n in names)
+    summary = (tmp_path / "summary.md").read_text()
+    assert "![RD maps](rd_carrada.png)" in summary and "spiking: 4/4 targets" in summary
+    text = report.to_text()
+    assert "spiking (loihi2): found 4/4 targets" in text and "resources on loihi2" in text
+
+
+def test_demo_json_has_the_spiking_figures(capsys, tmp_path):
+    assert main(["demo", "--preset", "carrada", "--json", "--out", str(tmp_path)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    scene = doc["scenes"][0]
+    assert scene["target"] == "loihi2" and scene["cell_sensitivity"] > 0.5
+    assert set(scene["timings_s"]) == {"conventional", "compile", "simulate"}
+    assert len(doc["files"]) == 5
