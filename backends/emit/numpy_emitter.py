@@ -1,0 +1,213 @@
+r"""``emit_numpy``: a compiled network or program as a standalone, readable numpy package.
+
+Generated layout (``<out_dir>/<name>/``)::
+
+    __init__.py        run, INPUTS
+    __main__.py        python -m <name> [PORT=]X.npy ... -o OUT.npz [--counts]
+    program.py         run(inputs, *, with_counts=False): the segments in order
+    network_<k>.py     the step loop of spiking segment k
+    stage_<node>.py    per IR node: folded neuron updates, deliveries, encoders,
+                       decoders, or the host op's compute(x)
+    _kernels.py        numpy kernels (delivery, ports, host CFAR)
+    weights.npz        every array (deterministic bytes)
+    names.json         original ids -> generated names, chain, target, version
+
+Every ``.py`` file starts with a header naming the radarsnn version, the chain
+and the target.  Equal input gives byte-identical files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+from backends.artifact import _radarsnn_version, load
+from backends.artifact_io import npz_bytes, write_atomic
+from backends.emit.names import slug
+from backends.emit.numpy_host import emit_host
+from backends.emit.numpy_loop import emit_network, import_from
+from backends.emit.package import PackageBuilder
+from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.reference.plan import build_plan
+from compiler.program import CompiledProgram, Segment
+from compiler.snn.network import SpikingNetwork
+from ir.errors import ArtifactError, CompileError
+
+__all__ = ["emit_numpy"]
+
+#: The marker file of a generated package (an existing directory without it is never cleared).
+NAMES_FILE = "names.json"
+
+
+def _as_program(source: object) -> tuple[CompiledProgram | None, list[SpikingNetwork]]:
+    if isinstance(source, str | os.PathLike):
+        return None, [load(source)]
+    kinds = {SpikingNetwork: lambda s: (None, [s]),
+             CompiledProgram: lambda s: (s, s.networks)}
+    if type(source) not in kinds:
+        raise CompileError(f"emit_numpy: source must be a SpikingNetwork, a CompiledProgram or "
+                           f"an artifact directory, got {type(source).__name__}")
+    return kinds[type(source)](source)
+
+
+def _target_name(program: CompiledProgram | None, networks: list[SpikingNetwork]) -> str:
+    if program is not None and program.target is not None:
+        return str(getattr(program.target, "name", program.target))
+    metas = [n.meta for n in networks]
+    return str(next((m.get("quantized_for") or m.get("target") for m in metas
+                     if m.get("quantized_for") or m.get("target")), "none"))
+
+
+def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out_dir: str | Path,
+               *, name: str | None = None, arithmetic: str = "float64") -> Path:
+    """Generate a standalone numpy simulator package for ``source``.
+
+    Parameters
+    ----------
+    source : SpikingNetwork, CompiledProgram, or path of an artifact directory
+        What to generate code for.  A program's host segments must be ops with a
+        host emitter (magnitude, sum, log, window, dft, linear, threshold, cfar, output).
+    out_dir : str or Path
+        The directory that receives the package folder.
+    name : str, optional
+        Package (folder) name, a Python identifier; default ``snn_<chain slug>``.
+    arithmetic : {"float64", "int64"}
+        As ``backends.reference.simulate``'s (``int64`` needs a quantized network).
+
+    Returns
+    -------
+    Path
+        The package directory ``out_dir/name``.
+
+    Raises
+    ------
+    CompileError
+        An unsupported source type or host op (naming the node), or a bad ``name``.
+    NetworkError, SimulationError
+        If a network does not validate or is not integer under ``int64``.
+    ArtifactError
+        An unreadable artifact, or ``out_dir/name`` exists and is not a generated package.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection,
+    ...                           NeuronParams, Population, SpikingNetwork)
+    >>> net = SpikingNetwork(name="tiny", n_steps=6,
+    ...     populations=[Population(id="in", shape={"i": 2}, source=True),
+    ...                  Population(id="out", shape={"o": 1},
+    ...                             params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
+    ...     projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
+    ...                                   produce=("o",), weights=np.ones((2, 1)))],
+    ...     encoders=[Encoder(port="x", population="in",
+    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
+    ...     decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     sorted(p.name for p in emit_numpy(net, tmp).iterdir())  # doctest: +NORMALIZE_WHITESPACE
+    ['__init__.py', '__main__.py', '_kernels.py', 'names.json', 'network_0.py', 'program.py',
+     'stage_in.py', 'stage_out.py', 'weights.npz']
+
+    Notes
+    -----
+    The generated code follows ``backends.reference`` step mode operation for
+    operation, so its outputs and spike counts are identical to
+    ``simulate(..., mode="step")`` / ``run_program(..., mode="step")``.
+    """
+    program, networks = _as_program(source)
+    chain = program.graph.name if program is not None else networks[0].name
+    name = name if name is not None else "snn_" + slug(chain)
+    str(ident(name))  # validates
+    if name.startswith("_"):
+        raise CompileError(f"package name {name!r} must not start with '_'")
+    version = _radarsnn_version()
+    header = render(template("header.tmpl"), version=comment(version), chain=comment(chain, 80),
+                    target=comment(_target_name(program, networks), 80))
+    pkg = PackageBuilder()
+    files: dict[str, Code] = {}
+    integer = arithmetic == "int64"
+    segments = program.segments if program is not None else [
+        Segment(kind="spiking", inputs=[e.port for e in networks[0].encoders],
+                outputs=[d.port for d in networks[0].decoders], network=networks[0])]
+    body, imports, net_names = [], {"_kernels"}, []
+    types = program.graph.infer_types() if program is not None else {}
+    if program is not None:
+        for node in program.graph.input_ids():
+            t = types[node]
+            body.append(render("node = $n\nvalues[node] = _kernels.check_input(inputs, node, $s, "
+                               "$c, $d)",
+                               n=lit(node), s=lit(tuple(t.shape)), c=lit(bool(t.complex)),
+                               d=lit(t.domain)))
+    else:
+        body.append(render("values.update(inputs)"))
+    for seg in segments:
+        if seg.kind == "spiking":
+            module = f"network_{len(net_names)}"
+            plan = build_plan(seg.network, arithmetic)
+            files[module + ".py"] = emit_network(pkg, plan, integer, header)
+            net_names.append({"module": module, "network": seg.network.name})
+            body.append(render("ports = $ports\nouts, spikes = $m.simulate({p: values[p] for p in "
+                               "ports})\n"
+                               "values.update(outs)\ncounts.append(spikes)", m=ident(module),
+                               ports=lit(tuple(e.port for e in seg.network.encoders))))
+        else:
+            op = program.graph.op(seg.node)
+            module = emit_host(pkg, seg.node, op, types[seg.inputs[0]])
+            body.append(render("node = $n\nsource = $i\nvalues[node] = $m.compute(values[source])",
+                               n=lit(seg.node),
+                               m=ident(module), i=lit(seg.inputs[0])))
+        imports.add(module)
+    inputs = (program.graph.input_ids() if program is not None
+              else [e.port for e in networks[0].encoders])
+    outputs = (program.graph.output_ids() if program is not None
+               else [d.port for d in networks[0].decoders])
+    files["program.py"] = render(template("program.py.tmpl"), header=header,
+                                 chain=comment(chain), imports=render(
+                                     "\n$i", i=import_from(sorted(imports))),
+                                 inputs=lit(tuple(inputs)), outputs=lit(tuple(outputs)),
+                                 body=indent(join(body)))
+    for module in pkg.bodies:
+        files[module + ".py"] = _stage_file(pkg, module, header)
+    for fixed in ("__init__", "__main__", "_kernels"):
+        files[fixed + ".py"] = render(template(fixed.strip("_") + ".py.tmpl"), header=header)
+    names = {"package": name, "chain": chain, "target": _target_name(program, networks),
+             "radarsnn_version": version, "arithmetic": arithmetic, "networks": net_names,
+             **pkg.names}
+    return _write(Path(out_dir) / name, files, names, pkg)
+
+
+def _stage_file(pkg: PackageBuilder, module: str, header: Code) -> Code:
+    code = pkg.module_code(module)
+    text = str(code)
+    blocks = []
+    if "@functools." in text:
+        blocks.append(render("import functools"))
+    if "np." in text:
+        blocks.append(render("import numpy as np"))
+    if "_kernels." in text:
+        blocks.append(render("from . import _kernels"))
+    imports = render("\n$b", b=join(blocks, "\n\n")) if blocks else render("")
+    return render(template("stage.py.tmpl"), header=header, node=comment(pkg.nodes[module]),
+                  imports=imports, functions=code)
+
+
+def _write(folder: Path, files: dict[str, Code], names: dict, pkg: PackageBuilder) -> Path:
+    if folder.exists():
+        if not (folder / NAMES_FILE).is_file():
+            if any(folder.iterdir()):
+                raise ArtifactError(f"{folder}: exists and is not a generated package (no "
+                                    f"{NAMES_FILE}); choose another output directory or name")
+        else:
+            shutil.rmtree(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for fname in sorted(files):
+            text = str(files[fname]).rstrip("\n") + "\n"
+            write_atomic(folder / fname, text.encode("utf-8"))
+        write_atomic(folder / "weights.npz", npz_bytes(dict(sorted(pkg.arrays.items()))))
+        write_atomic(folder / NAMES_FILE, (json.dumps(names, indent=1, sort_keys=True,
+                                                      ensure_ascii=True) + "\n").encode())
+    except OSError as exc:
+        raise ArtifactError(f"cannot write the generated package to {folder}: {exc}") from exc
+    return folder

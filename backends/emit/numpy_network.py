@@ -1,0 +1,213 @@
+r"""Numpy code of a spiking network's stage functions: neuron updates, deliveries, ports.
+
+The emitted code follows ``backends.reference`` step mode operation for
+operation (:mod:`compiler.snn.neurons` is the equation):
+
+* every population's update is written out per phase of its schedule with
+  its constants folded (``du = 0`` gives ``u = u + current``, ``dv = 0`` drops
+  the decay, a zero bias disappears, integer decays become
+  ``trunc(x·keep/4096)``);
+* every projection becomes a ``deliver_*`` function over the weights of the
+  reference plan (:func:`backends.reference.build_plan`): the same delay
+  classes, the same dense or CSR operands, the same summation order;
+* encoders and decoders repeat :mod:`compiler.snn.coding`'s formulas with the
+  code's constants folded.
+
+The step loop that calls them is :mod:`backends.emit.numpy_loop`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from backends.emit.package import PackageBuilder
+from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.reference.neuron import StepParams
+from compiler.snn.coding import N_PARTS, Decoder, Encoder, LatencyCode
+from compiler.snn.network import Population
+from compiler.snn.neurons import DECAY_ONE
+from compiler.snn.projections import MatrixProjection
+
+__all__ = ["DECODER_INPUT", "decode_function", "deliver_function", "encode_function",
+           "node_of", "update_function"]
+
+
+def node_of(item: Population | MatrixProjection, fallback: str) -> str:
+    """The IR node a population or projection came from (``fallback`` without one)."""
+    return str(item.origin.get("node") or fallback)
+
+
+# --------------------------------------------------------------------- neuron update
+def _decayed(var: str, d: float, integer: bool) -> Code:
+    """``(1 - d)·var`` folded: the variable itself, zeros, or a product."""
+    name = ident(var)
+    if integer:
+        keep = DECAY_ONE - round(d * DECAY_ONE)
+        if keep == DECAY_ONE:
+            return name
+        if keep == 0:
+            return render("np.zeros_like($x)", x=name)
+        return render("_kernels.decay_int($x, $keep)", x=name, keep=lit(keep))
+    if d == 0.0:
+        return name
+    if d == 1.0:
+        return render("np.zeros_like($x)", x=name)
+    return render("$keep * $x", keep=lit(1.0 - d), x=name)
+
+
+def _phase(sp_: StepParams, bias: float | int, input_on: bool, spiking_on: bool) -> Code:
+    lines = []
+    if input_on:
+        lines.append(render("u = $u + current", u=_decayed("u", sp_.du, sp_.integer)))
+        term = render("u") if bias == 0 else render("(u + $b)", b=lit(bias))
+    else:
+        lines.append(render("u = np.zeros_like(u)"))
+        term = lit(bias)
+    lines.append(render("v = $v + $term", v=_decayed("v", sp_.dv, sp_.integer), term=term))
+    lines.append(render("spikes = v >= $th", th=lit(sp_.v_th)) if spiking_on
+                 else render("spikes = np.zeros(v.shape, bool)"))
+    return join(lines)
+
+
+def update_function(pkg: PackageBuilder, module: str, pop: Population, sp_: StepParams) -> str:
+    """Write the folded neuron update of ``pop``; return its function name."""
+    fn = pkg.function(module, "update_", pop.id)
+    segs = sp_.segments
+    if len(segs) == 1:
+        phases = indent(_phase(sp_, segs[0].bias, segs[0].input_on, segs[0].spiking_on))
+    else:
+        parts = []
+        for i, s in enumerate(segs):
+            head = (render("if t < $e:", e=lit(s.stop)) if i == 0 else
+                    render("else:") if i == len(segs) - 1 else
+                    render("elif t < $e:", e=lit(s.stop)))
+            parts += [head, indent(_phase(sp_, s.bias, s.input_on, s.spiking_on))]
+        phases = indent(join(parts))
+    reset = {"fire_once": render("spikes &= ~fired"),
+             "value": render("v = np.where(spikes, $r, v)", r=lit(sp_.v_reset)),
+             "subtract": render("v = np.where(spikes, v - $th, v)", th=lit(sp_.v_th))}
+    summary = render("du=$du, dv=$dv, $n phase(s)\n    # v_th=$th, reset $reset", du=lit(sp_.du),
+                     dv=lit(sp_.dv), th=lit(sp_.v_th), n=lit(len(segs)), reset=lit(sp_.reset))
+    pkg.add(module, render(template("update.tmpl"), fn=ident(fn), summary=summary,
+                           pop=comment(pop.id), phases=phases,
+                           reset=indent(reset[sp_.reset])))
+    return fn
+
+
+# --------------------------------------------------------------------- deliveries
+def deliver_function(pkg: PackageBuilder, module: str, proj, dl, pops: dict, integer: bool) -> str:
+    """Write the delivery of projection ``proj``; return its function name."""
+    fn = pkg.function(module, "deliver_", proj.id)
+    src, tgt = pops[proj.source], pops[proj.target]
+    integer_ = lit(bool(integer))
+    if proj.kind == "stencil":
+        key = ""
+        for k in range(len(dl.delays)):
+            for part, arr in (("weights", dl.tap_weights[k]), ("offsets", dl.offsets[k]),
+                              ("deltas", dl.deltas[k]), ("interior", dl.interior[k]),
+                              ("base_of", dl.base_of)):
+                key = pkg.store(module, fn, k, part, arr)
+        pkg.add(module, render(
+            template("stencil.tmpl"), fn=ident(fn), delays=lit(dl.delays), proj=comment(proj.id),
+            key=lit(key), map_axes=lit(dl.map_axes), wrap=lit(dl.wrap),
+            src_axis_of=lit(dl.src_axis_of), src_dims=lit(dl.src_dims),
+            tgt_dims=lit(dl.tgt_dims), integer=integer_))
+        return fn
+    rep_axes = tuple(a for a in tgt.axes if a not in proj.produce)
+    index = ident("index_" + fn.removeprefix("deliver_"))
+    if sp.issparse(dl.weights[0]):
+        for k, w in enumerate(dl.weights):
+            w = w.tocsr()
+            w.sort_indices()
+            for part, arr in (("indptr", w.indptr.astype(np.int64)),
+                              ("indices", w.indices.astype(np.int64)), ("data", w.data)):
+                key = pkg.store(module, fn, k, part, arr)
+        body = render(
+            "    key = $key\n    parts = (\"indptr\", \"indices\", \"data\")\n"
+            "    csr = tuple(_kernels.array(key, k, part) for part in parts)\n"
+            "    return _kernels.sparse_current(events, n_batch, (*csr, $n_out), "
+            "$index(), $integer)", key=lit(key), n_out=lit(dl.n_out), index=index,
+            integer=integer_)
+    else:
+        key = pkg.store(module, fn, 0, "w", dl.weights[0])
+        body = render(
+            "    key = $key\n    w = _kernels.array(key, k, \"w\")\n"
+            "    return _kernels.matrix_current(events, "
+            "n_batch, w, $index(), $blas, $integer)", key=lit(key), index=index,
+            blas=lit(bool(dl.blas_events)), integer=integer_)
+    pkg.add(module, render(
+        template("deliver.tmpl"), fn=ident(fn), index=index, delays=lit(dl.delays),
+        proj=comment(proj.id), src_dims=lit(src.dims),
+        rep_positions=lit(tuple(src.axes.index(a) for a in rep_axes)),
+        col_positions=lit(tuple(src.axes.index(a) for a in proj.contract)),
+        n_reps=lit(int(dl.n_reps)), block_shape=lit(tuple(int(x) for x in dl.block_shape)),
+        to_target=lit(tuple(int(x) for x in dl.to_target)), body=body))
+    return fn
+
+
+# --------------------------------------------------------------------- ports
+def encode_function(pkg: PackageBuilder, module: str, enc: Encoder, pop: Population,
+            n_steps: int) -> str:
+    """Write the encoder of port ``enc``; return its function name."""
+    fn = pkg.function(module, "encode_", enc.port)
+    code = enc.code
+    names = pop.axes[:-1] if N_PARTS[enc.split] else pop.axes
+    axes = tuple(1 + names.index(a) for a in enc.normalize_axes)
+    if isinstance(code, LatencyCode):
+        lo, hi = code.x_min, code.x_max
+        lines = []
+        if code.kind == "log":
+            lo, hi = float(np.log(lo)), float(np.log(hi))
+            lines.append(render("x = np.log(x)"))
+        ramp = dict(hi=lit(float(hi)), span=lit(float(hi - lo)),
+                    t_span=lit(code.t_max - code.t_min), t0=lit(code.t_min))
+        lines.append(render("t = ($hi - x) / $span * $t_span", **ramp) if code.t_min == 0 else
+                     render("t = $t0 + ($hi - x) / $span * $t_span", **ramp))
+        lines.append(render("steps = np.rint(t).astype(np.int64)") if code.rounding == "nearest"
+                     else render("steps = np.floor(t).astype(np.int64)"))
+        lines.append(render("return _kernels.latency_train(steps, $limit, $n)",
+                            limit=lit(min(code.t_max, n_steps)), n=lit(n_steps)))
+        summary = render("latency code, $kind", kind=lit(code.kind))
+    else:
+        lines = [render("rates = $r * (x - $lo) / $span", r=lit(code.max_rate),
+                        lo=lit(code.x_min), span=lit(code.x_max - code.x_min)),
+                 render("return rates.ravel()")]
+        summary = render("rate code, max rate $r", r=lit(code.max_rate))
+    pkg.add(module, render(
+        template("encode.tmpl"), fn=ident(fn), summary=summary, port=comment(enc.port),
+        pop=comment(pop.id), normalize_axes=lit(axes), split=lit(enc.split),
+        x_min=lit(code.x_min), x_max=lit(code.x_max), body=indent(join(lines))))
+    return fn
+
+
+#: What each decoder kind reads from the step loop: first spikes, counts or membranes.
+DECODER_INPUT = {"spike_time": "first", "spike_table": "first", "count": "count",
+                 "spiked": "count", "membrane": "v"}
+
+
+def decode_function(pkg: PackageBuilder, module: str, dec: Decoder, pop: Population) -> str:
+    """Write the decoder of port ``dec``; return its function name."""
+    fn = pkg.function(module, "decode_", dec.port)
+    a = dict(scale=lit(dec.scale), offset=lit(dec.offset), missing=lit(dec.missing))
+    if dec.kind == "spike_time":
+        body = render("t = activity.astype(np.float64)\nvalue = $scale * ($t_ref - t) + $offset\n"
+                      "y = np.where(activity >= 0, value, $missing)", t_ref=lit(dec.t_ref), **a)
+    elif dec.kind == "count":
+        body = render("y = $scale * activity.astype(np.float64) + $offset", **a)
+    elif dec.kind == "membrane":
+        body = render("y = $scale * activity.astype(np.float64) + $offset", **a)
+    elif dec.kind == "spiked":
+        body = render("y = (activity > 0).astype(np.float64)")
+    else:
+        key = pkg.store(module, fn, 0, "table", np.asarray(dec.table, np.float64))
+        body = render(
+            "key = $key\ntable = _kernels.array(key, 0, \"table\")\nk = activity - $t_ref\n"
+            "inside = (activity >= 0) & (k >= 0) & (k < table.size)\n"
+            "entry = table[np.clip(k, 0, table.size - 1)]\nvalue = $scale * entry + $offset\n"
+            "y = np.where(inside, value, $missing)", key=lit(key), t_ref=lit(int(dec.t_ref)), **a)
+    pkg.add(module, render(
+        template("decode.tmpl"), fn=ident(fn), summary=render("kind $k", k=lit(dec.kind)),
+        port=comment(dec.port), pop=comment(pop.id), body=indent(body), dims=lit(pop.dims),
+        combine=lit(dec.combine)))
+    return fn
