@@ -24,8 +24,8 @@ replicated over ``C`` chirps with one shared weight matrix:
   dyadic.
 
 Printed: medians of ``--repeats`` runs of ``simulate(mode="step")`` and
-``mode="closed"``; Brian2 2.x (numpy target, and cython where a C compiler
-works) building and running the same network with ``dt = 1`` step; agreement
+``mode="closed"``; Brian2 (numpy target, and cython where a C compiler works) building and
+running the same network through :mod:`backends.brian2` with ``dt = 1`` step; agreement
 of every neuron's spike step; time ratios, weight-storage ratio, and the
 numpy FFT's time and the S-FT's accuracy against it (the paper's RMSE protocol).
 
@@ -129,53 +129,34 @@ def paper_rmse(estimate: np.ndarray, reference: np.ndarray) -> float:
 
 
 def brian2_or_none() -> Any:
+    from backends.brian2 import import_brian2
+    from ir.errors import SimulationError
+
     try:
-        import brian2
-    except Exception as exc:  # ImportError, or brian2 failing on this numpy (AttributeError)
-        print(f"brian2: not available ({type(exc).__name__}: {exc}); skipping the Brian2 part. "
-              "Install it in a separate venv: pip install 'brian2==2.9.0' 'numpy>=2.0,<2.4'")
+        return import_brian2()
+    except SimulationError as exc:
+        print(f"brian2: not available; skipping the Brian2 part. {exc}")
         return None
-    return brian2
 
 
 def run_brian2(b2: Any, net: SpikingNetwork, x: np.ndarray, target: str) -> dict:
-    """Build and run the same network in Brian2; spike steps, timings and synapse bytes."""
+    """Build and run the same network with :mod:`backends.brian2`; spike steps, timings, bytes."""
+    from backends.brian2 import build_model
+    from backends.reference.encoding import encode_inputs
+
     b2.prefs.codegen.target = target
     start = time.perf_counter()
-    src, neu, proj = net.population["adc"], net.population["sft"], net.projections[0]
-    params, code = neu.params, net.encoders[0].code
-    window = params.phases[1].start_step
-    steps = code.spike_steps(x).ravel()
-    fire = np.flatnonzero(steps < window)
-    gen = b2.SpikeGeneratorGroup(src.size, fire, steps[fire] * b2.ms, dt=1 * b2.ms)
-    group = b2.NeuronGroup(
-        neu.size, "u : 1\nv : 1\nfired : boolean", dt=1 * b2.ms,
-        threshold="v >= v_th and t >= t_charge and not fired", reset="fired = True",
-        namespace={"v_th": params.v_th, "t_charge": window * b2.ms,
-                   "b": params.phases[1].bias})
-    # one step of the ramp neuron, after this step's input arrived (Brian: thresholds ->
-    # synapses -> end); threshold and reset moved behind it, so spike times are ours exactly
-    group.run_regularly("u = u * int(t < t_charge)\nv = v + u + b * int(t >= t_charge)",
-                        when="end", order=0)
-    group.thresholder["spike"].when, group.thresholder["spike"].order = "end", 1
-    group.resetter["spike"].when, group.resetter["spike"].order = "end", 2
-    syn = b2.Synapses(gen, group, "w : 1 (constant)", on_pre="u_post += w", delay=0 * b2.ms,
-                      dt=1 * b2.ms)
-    n_in, n_out = proj.n_in_out
-    reps = src.size // n_in  # no sharing in Brian2: one synapse per instance
-    pre = (np.arange(reps)[:, None, None] * n_in + np.arange(n_in)[None, :, None])
-    post = (np.arange(reps)[:, None, None] * n_out + np.arange(n_out)[None, None, :])
-    pre, post = np.broadcast_arrays(pre, post)
-    syn.connect(i=pre.ravel(), j=post.ravel())
-    syn.w = np.broadcast_to(proj.weights, pre.shape).ravel()
-    monitor = b2.SpikeMonitor(group)
-    network = b2.Network(gen, group, syn, monitor)
+    trains, n_frames, _ = encode_inputs(net, {"x": x})
+    model = build_model(b2, net, trains, n_frames)
     built = time.perf_counter()
-    network.run(net.n_steps * b2.ms, profile=True)
+    model.net.run(net.n_steps * b2.ms, profile=True, namespace={})
     done = time.perf_counter()
-    loop_s = sum(float(d / b2.second) for _, d in network.profiling_info)
-    first = np.full(neu.size, -1, np.int64)
-    first[np.asarray(monitor.i[:])] = np.rint(np.asarray(monitor.t[:] / b2.ms)).astype(np.int64)
+    loop_s = sum(float(d / b2.second) for _, d in model.net.profiling_info)
+    monitor = model.monitors["sft"]
+    first = np.full(net.population["sft"].size, -1, np.int64)
+    first[np.asarray(monitor.i[:])[::-1]] = np.rint(
+        np.asarray(monitor.t[:] / b2.ms)[::-1]).astype(np.int64)
+    (syn, _), = model.synapses.values()
     arrays = {}
     for var in syn.variables.values():
         if type(var).__name__ == "DynamicArrayVariable" and var.size == len(syn):
