@@ -36,6 +36,7 @@ from ir.ops import (
     CFAR,
     DFT,
     Classifier,
+    Cluster,
     Linear,
     Log,
     Magnitude,
@@ -43,6 +44,7 @@ from ir.ops import (
     Output,
     Sum,
     Threshold,
+    Track,
     Window,
 )
 from ir.types import TensorType
@@ -122,12 +124,42 @@ def _output(node_id: str, op: Output, args: list, types: list) -> np.ndarray:
     return args[0]
 
 
+def _cluster(node_id: str, op: Cluster, args: list, types: list) -> np.ndarray:
+    from radar.clustering import cluster_detections
+
+    maps = [types[0].index(a) for a in op.axes]
+    moved = [np.moveaxis(np.asarray(a), maps, [-2, -1]) for a in args]
+    # a mask decoded from spikes may arrive as 0/1 floats (run_program's host segments)
+    return cluster_detections(moved[0] != 0, moved[1] if len(moved) == 2 else None,
+                              eps_bins=op.eps_bins, min_samples=op.min_samples,
+                              max_clusters=op.max_clusters, axes_scale=op.axes_scale,
+                              wrap=op.wrap)
+
+
+def _track(node_id: str, op: Track, args: list, types: list) -> np.ndarray:
+    from radar.tracking import track_sequence
+
+    return track_sequence(args[0], **op.tracker_params())
+
+
 def _classifier(node_id: str, op: Classifier, args: list, types: list) -> np.ndarray:
-    raise IRError(
-        f"node {node_id!r} (classifier): classifier evaluation is not implemented yet "
-        "(its layers come with a later issue); evaluate the graph up to its input instead",
-        node=node_id,
-    )
+    if not op.layers:
+        raise IRError(
+            f"node {node_id!r} (classifier): classifier evaluation is not implemented yet for "
+            "an opaque classifier (no 'layers'); declare its layer stack and weights "
+            "(docs/classifier.md) or evaluate the graph up to its input instead",
+            node=node_id,
+        )
+    from compiler.classifier import classify, load_weights
+
+    t = types[0]
+    batch = op.batch_axes(t)
+    order = [t.index(a) for a in (*batch, op.time_axis, *op.map_axes)]
+    x = np.transpose(args[0], order)
+    lead = x.shape[: len(batch)]
+    rois = x.reshape(-1, *x.shape[len(batch):])
+    scores = classify(op, load_weights(op, rois.shape, node_id), rois, node_id).scores
+    return scores.reshape(*lead, op.num_classes)
 
 
 EVAL_REGISTRY: dict[type[Op], Implementation] = {
@@ -141,6 +173,8 @@ EVAL_REGISTRY: dict[type[Op], Implementation] = {
     Threshold: _threshold,
     Output: _output,
     Classifier: _classifier,
+    Cluster: _cluster,
+    Track: _track,
 }
 """The reference implementation of every op that computes (graph inputs take the given arrays)."""
 
@@ -176,8 +210,8 @@ def evaluate(
         If the graph does not verify, an input is missing or extra, an input array
         has the wrong shape, dtype or non-finite values (naming the input node), an
         op has no implementation, an implementation fails or returns an array that
-        does not match the node's type (naming the node), or the graph holds a
-        ``classifier`` (not implemented yet).
+        does not match the node's type (naming the node), or the graph holds an
+        opaque ``classifier`` (no layers) or one whose weights file is missing.
 
     Examples
     --------

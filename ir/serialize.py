@@ -125,7 +125,8 @@ def graph_from_dict(data: Mapping[str, Any], *, registry: OpRegistry | None = No
     Traceback (most recent call last):
     ...
     ir.errors.ChainFileError: chain 'chain', node 'w': unknown op 'windw'; valid ops: \
-adc_input, cfar, classifier, dft, input, linear, log, magnitude, output, sum, threshold, window
+adc_input, cfar, classifier, cluster, dft, input, linear, log, magnitude, output, sum, threshold, \
+track, window
     """
     registry = OP_REGISTRY if registry is None else registry
     if not isinstance(data, Mapping):

@@ -2,8 +2,9 @@
 
 :func:`build_report` gathers :mod:`~compiler.report.stages` (Table 3 bottom),
 :mod:`~compiler.report.frame_io` (Table 3 top), :mod:`~compiler.report.opcounts`
-(Table 1), latency and the placement into a :class:`~compiler.report.render.Report`
-(``to_json``, ``to_markdown``, ``save_core_map``).  See ``docs/report.md``.
+(Table 1), the host/spiking :mod:`~compiler.report.boundaries`, latency and the placement
+into a :class:`~compiler.report.render.Report` (``to_json``, ``to_markdown``,
+``save_core_map``).  See ``docs/report.md``.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from compiler.hardware import BUDGETS, load_profile
+from compiler.report.boundaries import boundary_rows
 from compiler.report.frame_io import frame_io
 from compiler.report.opcounts import graph_cfar_op_counts
 from compiler.report.render import Report
@@ -130,6 +132,7 @@ def build_report(program, *, sim_results: Sequence | None = None,
         "cores_per_chip": profile.cores_per_chip, "stages": stages,
         "frame_io": frame_io(program.graph, frame_rate_hz=rate, real_bits=real_bits,
                              n_angle_bins=n_angle_bins),
+        "boundaries": boundary_rows(program, frame_rate_hz=rate, real_bits=real_bits),
         "cfar_ops": graph_cfar_op_counts(program.graph, steps),
         "latency": {"networks": lat_rows, "total_steps": total_steps, "total_s": total_s,
                     "frame_period_s": 1.0 / rate,

@@ -7,6 +7,8 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
                   multiplexed, steps_per_frame, cores, blocks, synapse_memory_bits, *_total,
                   spikes_bound, ...
     frame_io[]    name, source, shape, values, bits_per_value, bytes, memory_kB, bandwidth_Mbit_s
+    boundaries[]  kind, from, to, node, shape, values_per_frame, bits_per_value, crossings,
+                  bits_per_frame, kB_per_frame, Mbit_s
     cfar_ops[]    node, n_train, algorithm, add, cmp, total[, n_steps]
     latency       networks[] (network, time_steps, runs, latency_steps, step_s, latency_s);
                   total_steps, total_s, frame_period_s, fits, max_step_s, step_note
@@ -75,6 +77,12 @@ class Report:
         lines += ["", f"## Frame I/O at {d['frame_rate_hz']:g} frames/s", ""]
         lines += _table(d["frame_io"], ("name", "source", "shape", "bits_per_value",
                                         "memory_kB", "bandwidth_Mbit_s"))
+        if d.get("boundaries"):
+            lines += ["", "## Segment boundaries (host ↔ spiking, per frame)", ""]
+            lines += _table(d["boundaries"], ("kind", "from", "to", "node", "values_per_frame",
+                                              "bits_per_value", "kB_per_frame", "Mbit_s"))
+            lines += ["", "Total host ↔ chip traffic: "
+                      f"{_fmt(sum(r['Mbit_s'] for r in d['boundaries']))} Mbit/s."]
         if d["cfar_ops"]:
             lines += ["", "## Operations per cell under test (Table 1)", ""]
             lines += _table(d["cfar_ops"], ("node", "algorithm", "add", "cmp", "total"))

@@ -6,8 +6,8 @@ to add ops, e.g. ``{**OP_REGISTRY, "my_op": MyOp}``.
 
 Examples
 --------
->>> sorted(OP_REGISTRY)[:4]
-['adc_input', 'cfar', 'classifier', 'dft']
+>>> {"adc_input", "cfar", "dft", "cluster", "track"} <= set(OP_REGISTRY)
+True
 >>> OP_REGISTRY["window"] is Window
 True
 """
@@ -18,16 +18,20 @@ from ir.ops.base import Op
 from ir.ops.classify import Classifier
 from ir.ops.compare import CFAR, CfarWindow, EdgeMode, Threshold
 from ir.ops.elementwise import Log, Magnitude, MagnitudeKind
+from ir.ops.host import CLUSTER_FEATURES, TRACK_STATE, Cluster, Track
 from ir.ops.io import AdcInput, Input, Output
 from ir.ops.linear import DFT, Linear, Sum, Window, WindowKind
 
 __all__ = [
     "CFAR",
+    "CLUSTER_FEATURES",
     "DFT",
     "OP_REGISTRY",
+    "TRACK_STATE",
     "AdcInput",
     "CfarWindow",
     "Classifier",
+    "Cluster",
     "EdgeMode",
     "Input",
     "Linear",
@@ -39,6 +43,7 @@ __all__ = [
     "Output",
     "Sum",
     "Threshold",
+    "Track",
     "Window",
     "WindowKind",
     "make_registry",
@@ -72,4 +77,6 @@ OP_REGISTRY: OpRegistry = make_registry(
     CFAR,
     Threshold,
     Classifier,
+    Cluster,
+    Track,
 )
