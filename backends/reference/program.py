@@ -139,7 +139,9 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
             plan = None if plans is None else plans[len(sims)]
             result = simulate(seg.network, {p: values[p] for p in seg.inputs}, mode=mode,
                               arithmetic=arithmetic, record_spikes=record_spikes, plan=plan)
-            values.update(result.outputs)
+            # a decoded mask (0/1 from spikes) is a boolean array, like the interpreter's
+            values.update({k: (np.asarray(v) != 0) if types[k].domain == "mask" else v
+                           for k, v in result.outputs.items()})
             sims.append(result)
         else:
             op = graph.op(seg.node)

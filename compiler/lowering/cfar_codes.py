@@ -19,7 +19,8 @@ code's range is chosen so that ``D_real`` is exactly
   wrong comparisons and balances missed and extra detections.
 
 The range ``[x_lo, x_hi]`` comes from the calibration quantiles (default 1 % and
-99 %: clipping the top only ever blocks a CUT above ``x_hi``, the bottom only
+100 %, the calibration maximum: clipping the top blocks a CUT above ``x_hi`` — the
+strongest targets, so the top is not clipped by default — and the bottom only
 silences cells that cannot be detections), then ``x_lo`` is lowered until
 ``s·ln α`` lands on ``D`` or ``D + 1/2``.  The whole budget of ``T`` steps is the
 code window: a CUT whose delayed spike would arrive after ``T`` has
@@ -69,7 +70,7 @@ __all__ = ["TIE_RULES", "RANGE_QUANTILES", "input_range", "os_log_code", "ca_lin
 TIE_RULES = ("balanced", "exact")
 
 #: Default (low, high) calibration quantiles of the encoded range, per CFAR kind.
-RANGE_QUANTILES: dict[str, tuple[float, float]] = {"os": (0.01, 0.99), "ca": (0.0, 0.999)}
+RANGE_QUANTILES: dict[str, tuple[float, float]] = {"os": (0.01, 1.0), "ca": (0.0, 0.999)}
 
 
 def _field(record: Any, name: str) -> Any:

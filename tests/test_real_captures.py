@@ -1,0 +1,98 @@
+"""Compiled chains on the real captures of ../shared/data agree with the conventional chains.
+
+* TI chirps (``ti_chirps/data_tum.npy``, 4 real chirps × 1024 samples): the compiled 1-D range
+  chain (examples/chains/ti_range.yaml: range S-FT → |X| → OS-CFAR, for loihi2) finds the
+  annotated reflections (data README) that the conventional chain finds, within ± 1 bin.
+* OpenRadar (``openradar/simple_frame_1.npy``, decoded, chirp means removed as its README says):
+  the compiled 2-D chain's RD map and OS-CFAR detections against the conventional ones.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backends.reference import run_program
+from compiler import compile_graph
+from compiler.demo.matching import score_peaks
+from compiler.lowering.dft_common import modulus_rmse
+from ir import Graph, evaluate
+from radar.loaders import load_openradar, load_ti_chirps
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Annotated reflections per chirp (range-FFT bins), from the data README.
+ANNOTATED = {0: [25, 201], 1: [404], 2: [42, 66], 3: [1, 39, 87, 127]}
+
+
+def _near(bins, found) -> bool:
+    return any(abs(int(b) - int(f)) <= 1 for f in found for b in [bins])
+
+
+@pytest.fixture(scope="module")
+def ti(shared_data):
+    chirps, _ = load_ti_chirps(shared_data)
+    return chirps, Graph.from_yaml(ROOT / "examples" / "chains" / "ti_range.yaml")
+
+
+def test_ti_chirps_calibrated_on_the_capture_match_the_conventional_detections(ti):
+    chirps, graph = ti
+    program = compile_graph(graph, "loihi2", calibration_inputs={"chirp": chirps})
+    for i, chirp in enumerate(chirps):
+        spiking = np.flatnonzero(run_program(program, {"chirp": chirp}).outputs["out"])
+        conventional = np.flatnonzero(evaluate(graph, {"chirp": chirp})["out"])
+        # measured: identical detection sets on all four chirps
+        assert spiking.tolist() == conventional.tolist(), i
+        for b in ANNOTATED[i]:
+            if _near(b, conventional):
+                assert _near(b, spiking), (i, b)
+
+
+@pytest.mark.parametrize("i", range(4))
+def test_ti_chirps_leave_one_out_find_the_annotated_reflections(ti, i):
+    chirps, graph = ti
+    others = np.delete(chirps, i, axis=0)  # calibrated without the chirp under test
+    program = compile_graph(graph, "loihi2", calibration_inputs={"chirp": others})
+    spiking = np.flatnonzero(run_program(program, {"chirp": chirps[i]}).outputs["out"])
+    conventional = np.flatnonzero(evaluate(graph, {"chirp": chirps[i]})["out"])
+    required = [b for b in ANNOTATED[i] if _near(b, conventional)]
+    assert required or i == 1  # chirp 1's weak far target is below the conventional CFAR too
+    assert all(_near(b, spiking) for b in required), (required, spiking.tolist())
+
+
+def _openradar_chain() -> Graph:
+    return Graph.from_dict({"name": "openradar-rd", "nodes": [
+        {"id": "frame", "op": "input", "shape": {"chirp": 128, "sample": 128}, "complex": True},
+        {"id": "win", "op": "window", "input": "frame", "axis": "sample"},
+        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range"},
+        {"id": "dwin", "op": "window", "input": "rng", "axis": "chirp"},
+        {"id": "dop", "op": "dft", "input": "dwin", "axis": "chirp", "out_axis": "doppler",
+         "shift": True},
+        {"id": "mag", "op": "magnitude", "input": "dop", "kind": "square"},
+        {"id": "det", "op": "cfar", "input": "mag", "kind": "os", "axes": ["range", "doppler"],
+         "guard": [2, 2], "train": [6, 4], "k": 100, "pfa": 1e-4, "edge": ["clip", "wrap"]},
+        {"id": "out", "op": "output", "input": "det"}]})
+
+
+@pytest.mark.parametrize(("target", "min_precision"), [(None, 0.97), ("loihi2", 0.70)])
+def test_openradar_frame_rd_map_and_detections_agree(shared_data, target, min_precision):
+    frame = load_openradar("simple_frame_1", shared_data)
+    frame = frame - frame.mean(axis=1, keepdims=True)
+    graph = _openradar_chain()
+    conv = evaluate(graph, {"frame": frame})
+    program = compile_graph(graph, target, calibration_inputs={"frame": frame})
+    values = run_program(program, {"frame": frame}).values
+    spk_map, conv_map = np.asarray(values["mag"]).T, conv["mag"].T  # [range, doppler]
+    # measured: RMSE 3.6e-5 (no target) / 9.7e-5 (loihi2, 8-bit weights)
+    assert modulus_rmse(spk_map, conv_map, drop_bin0=False) < 2e-4
+    s, c = values["det"].T, conv["det"].T
+    hits = int((s & c).sum())
+    # measured: sensitivity 0.978 / 1.000, precision 0.976 / 0.718 (369 conventional cells);
+    # on loihi2 the OS-CFAR's CUT weight k + 1/2 = 100.5 and training weights -1 share one
+    # 8-bit scale, so the count is no longer exact (quantize record: threshold_error 0.21)
+    assert hits / c.sum() >= 0.97 and hits / s.sum() >= min_precision
+    named = [(107, 64), (1, 64), (41, 64)]  # strongest reflections (data README), zero Doppler
+    assert None not in score_peaks(c, conv_map, named).found
+    assert None not in score_peaks(s, spk_map, named).found
