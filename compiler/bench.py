@@ -97,12 +97,16 @@ class BenchReport:
 
 def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: BenchReport) -> None:
     """Closed form vs Brian2 on the range S-FT of one receiver (Brian2 is an optional extra)."""
-    try:
-        from backends.brian2 import run_brian2
-    except ImportError:
-        report.notes.append("Brian2 not timed: install the extra (pip install -e '.[brian2]')")
-        return
+    from backends.brian2 import import_brian2, simulate_brian2
     from backends.reference import build_plan, simulate
+    from ir.errors import RadarSNNError
+
+    try:
+        import_brian2()
+    except (ImportError, RadarSNNError) as err:
+        report.notes.append(f"Brian2 not timed ({err}); install the extra: pip install -e "
+                            "'.[brian2]'")
+        return
     from compiler.chains import range_chain
     from compiler.compile import compile_graph
 
@@ -113,8 +117,13 @@ def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: Bench
     plan = build_plan(net, "float64")
     report.seconds["closed_range_stage"] = median_s(
         lambda: simulate(net, inputs, mode="closed", plan=plan), repeats)
-    report.seconds["brian2_range_stage"] = median_s(lambda: run_brian2(net, inputs),
+    report.seconds["brian2_range_stage"] = median_s(lambda: simulate_brian2(net, inputs),
                                                     max(1, min(repeats, 5)))
+    same = simulate_brian2(net, inputs).spike_counts == simulate(net, inputs,
+                                                                 mode="step").spike_counts
+    report.notes.append(f"range stage: 1 rx x {config.n_chirps} chirps x {config.n_samples} "
+                        f"samples, {net.n_steps} steps; Brian2 (numpy target) spike counts "
+                        f"{'equal' if same else 'DIFFER from'} the step engine's")
 
 
 def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: int | None = None,

@@ -21,6 +21,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
+from backends.reference.signed_factor import SignedFactor, signed_factor
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
 
@@ -28,6 +29,17 @@ from compiler.snn.projections import MatrixProjection
 _DENSE_EVENTS_PER_ROW = 16
 
 __all__ = ["MatrixDelivery"]
+
+#: Factor dense matrices of at least this many entries (smaller ones are cheap anyway).
+_FACTOR_MIN_ENTRIES = 4096
+
+
+def _worth_factoring(w, integer: bool) -> SignedFactor | None:
+    """The sign-symmetric factor of a large dense float ``w`` if it halves the work, else None."""
+    if integer or sp.issparse(w) or w.size < _FACTOR_MIN_ENTRIES:
+        return None
+    factor = signed_factor(w)
+    return factor if factor.saving <= 0.5 else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,6 +83,9 @@ class MatrixDelivery:
     #: Let unweighted events take the BLAS path when dense (set by ``build_plan`` for networks
     #: the closed form cannot run, where no second engine must add in the same order).
     blas_events: bool = False
+    #: Per delay class, the sign-symmetric factor of a dense float matrix when it saves at
+    #: least half the multiply-adds of the dense whole-batch product (else None).
+    factors: tuple[SignedFactor | None, ...] = ()
 
     @classmethod
     def build(
@@ -123,12 +138,14 @@ class MatrixDelivery:
                                        tuple(src.shape[a] for a in proj.contract))
                   if proj.contract else np.zeros(src.size, np.int64))
         block_axes = rep_axes + proj.produce
+        factors = tuple(_worth_factoring(w, integer) for w in weights)
         return cls(
             id=proj.id, source=proj.source, target=proj.target, delays=delays, weights=weights,
             row_synapses=row_synapses, rep_of=rep_of.astype(np.int64),
             col_of=col_of.astype(np.int64), n_reps=prod(rep_dims), n_in=proj.n_in,
             n_out=proj.n_out, block_shape=rep_dims + tuple(tgt.shape[a] for a in proj.produce),
             to_target=tuple(block_axes.index(a) for a in tgt.axes), integer=integer,
+            factors=factors,
         )
 
     @property
@@ -168,10 +185,19 @@ class MatrixDelivery:
             # row by one bincount (events added in order), one BLAS product, no sorting
             n_rows = n_batch * self.n_reps
             data = None if values is None else values.astype(dtype)
-            one_hot = np.bincount(rows * self.n_in + self.col_of[n], weights=data,
-                                  minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
-            block = (one_hot @ weights).astype(dtype, copy=False).reshape(n_batch,
-                                                                          *self.block_shape)
+            factor = self.factors[k] if self.factors else None
+            if factor is not None:  # fold ±-symmetric parts first: a smaller core product
+                cols = self.col_of[n]
+                signed = factor.in_sign[cols] if data is None else data * factor.in_sign[cols]
+                n_core = factor.core.shape[0]
+                one_hot = np.bincount(rows * n_core + factor.in_row[cols], weights=signed,
+                                      minlength=n_rows * n_core).reshape(n_rows, n_core)
+                product = (one_hot @ factor.core)[:, factor.out_col] * factor.out_sign
+            else:
+                one_hot = np.bincount(rows * self.n_in + self.col_of[n], weights=data,
+                                      minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
+                product = one_hot @ weights
+            block = product.astype(dtype, copy=False).reshape(n_batch, *self.block_shape)
             return block.transpose(0, *(1 + a for a in self.to_target))
         else:
             order = np.argsort(rows, kind="stable")
