@@ -88,17 +88,15 @@ def test_imported_op_type_checks_in_a_graph(imported) -> None:
     assert g.infer_types()["cls"].axes == {"object": 2, "class": 3}
 
 
-def test_import_compile_simulate(imported) -> None:
-    from compiler.lowering import default_registry
-
-    motifs = default_registry().describe().get("classifier", {}).get("motifs", [])
-    if set(motifs) <= {"host"}:
-        pytest.skip("the classifier lowering (issue #8) is not registered yet")
+def test_import_compile_simulate(tmp_path) -> None:
     from backends.reference import run_program
     from compiler.compile import compile_graph
     from ir.evaluate import evaluate
 
-    op, _ = imported
+    # spikes from one reference level (a real-valued first layer has no spiking form)
+    nir.write(tmp_path / "snn.nir", _snn_graph())
+    op = import_classifier(tmp_path / "snn.nir", tmp_path / "snn.npz", time_axis="frame",
+                           encoding={"kind": "levels", "levels": [1.0]})
     g = Graph.from_dict({"name": "clf", "nodes": [
         {"id": "roi", "op": "input", "shape": {"object": 2, "frame": 5, "range": 6,
                                                 "doppler": 6}, "domain": "amplitude"},

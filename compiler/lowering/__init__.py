@@ -12,6 +12,7 @@ Examples
 
 from compiler.lowering.builder import NetworkBuilder
 from compiler.lowering.cfar import register_cfar
+from compiler.lowering.classifier import register_classifier
 from compiler.lowering.context import LoweringContext, lower_graph
 from compiler.lowering.dft_fft import register_fft
 from compiler.lowering.dft_rate import register_rate
@@ -42,4 +43,5 @@ def default_registry() -> LoweringRegistry:
     register_rate(registry)
     register_fft(registry)
     register_time(registry)
+    register_classifier(registry)
     return registry
