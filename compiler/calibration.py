@@ -9,6 +9,17 @@ encoder ranges and thresholds from ``max_part · headroom`` with
 
 .. math:: \text{max\_part} = \max(\max|\mathrm{Re}\,x|, \max|\mathrm{Im}\,x|).
 
+*Axis profiles* (for per-bin stage gains, see :mod:`compiler.lowering.dft_time`):
+for every axis ``a`` of a measured node, ``axis_max[a][i]`` is the largest part
+``p = max(|Re x|, |Im x|)`` at index ``i`` of ``a`` (over all other axes and
+frames), and ``axis_quantiles[a]`` are the quantiles of the ``|Re|, |Im|`` parts
+each divided by the maximum of its index,
+
+.. math:: \hat p = p / m_i, \qquad m_i = \texttt{axis\_max[a][i]}
+
+(``0`` where ``m_i = 0``): the shape of the values once every index is scaled
+to the same maximum, which a stage with per-index gains ``g_i ∝ 1/m_i`` sees.
+
 Examples
 --------
 >>> import numpy as np
@@ -23,6 +34,8 @@ from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+
+from ir.errors import CompileError
 
 __all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy",
            "synthetic_inputs"]
@@ -52,6 +65,11 @@ class NodeCalibration:
         For a graph input under ``per-input``: the axes its encoder normalises over.
     source : {"inputs", "bounds"}
         Measured on calibration inputs, or propagated from declared input bounds.
+    axis_max : dict of str to tuple of float
+        Per axis, the largest part at each index (empty when derived from bounds).
+    axis_quantiles : dict of str to tuple of float
+        Per axis, :data:`N_QUANTILES` quantiles of the parts divided by their index's
+        maximum (the part values under per-index gains ``1/m``).
     """
 
     node: str
@@ -65,6 +83,8 @@ class NodeCalibration:
     abs_quantiles: tuple[float, ...] = ()
     normalize_axes: tuple[str, ...] = ()
     source: Literal["inputs", "bounds"] = "inputs"
+    axis_max: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    axis_quantiles: dict[str, tuple[float, ...]] = field(default_factory=dict)
 
     @property
     def max_part(self) -> float:
@@ -77,6 +97,8 @@ class NodeCalibration:
         d["part_quantiles"] = list(self.part_quantiles)
         d["abs_quantiles"] = list(self.abs_quantiles)
         d["normalize_axes"] = list(self.normalize_axes)
+        d["axis_max"] = {a: list(v) for a, v in self.axis_max.items()}
+        d["axis_quantiles"] = {a: list(v) for a, v in self.axis_quantiles.items()}
         return d
 
 
@@ -122,8 +144,24 @@ def _top(a: np.ndarray) -> float:
     return float(a.max()) if a.size else 0.0
 
 
-def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = ()
-            ) -> NodeCalibration:
+def _axis_profiles(parts: np.ndarray, re: np.ndarray, im: np.ndarray | None,
+                   axes: tuple[str, ...]) -> tuple[dict, dict]:
+    """``axis_max`` and ``axis_quantiles`` of values with a leading frames axis."""
+    maxima, quantiles = {}, {}
+    for k, axis in enumerate(axes, start=1):
+        other = tuple(j for j in range(parts.ndim) if j != k)
+        m = parts.max(axis=other)
+        shape = [1] * parts.ndim
+        shape[k] = m.size
+        inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0).reshape(shape)
+        pooled = [re * inv] + ([] if im is None else [im * inv])
+        maxima[axis] = tuple(float(x) for x in m)
+        quantiles[axis] = _quantiles(np.concatenate([p.ravel() for p in pooled]))
+    return maxima, quantiles
+
+
+def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = (),
+            axes: tuple[str, ...] = ()) -> NodeCalibration:
     """The :class:`NodeCalibration` of ``values`` (all calibration frames of one node).
 
     Parameters
@@ -134,6 +172,10 @@ def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = 
         Real or complex values (any shape).
     normalize_axes : tuple of str
         Recorded as is (for per-input inputs).
+    axes : tuple of str
+        Names of the trailing axes of ``values`` (the node's IR axes; a leading
+        frames axis may precede them); gives ``axis_max``/``axis_quantiles``.
+        Empty: no axis profiles.
 
     Returns
     -------
@@ -143,16 +185,29 @@ def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = 
     --------
     >>> measure("x", np.array([-2.0, 1.0])).min, measure("x", np.array([-2.0, 1.0])).max_abs
     (-2.0, 2.0)
+    >>> c = measure("x", np.array([[[4.0, -1.0], [2.0, 0.5j]]]), axes=("chirp", "range"))
+    >>> c.axis_max
+    {'chirp': (4.0, 2.0), 'range': (4.0, 1.0)}
     """
     v = np.asarray(values)
     re, im = np.abs(np.real(v)).astype(np.float64), np.abs(np.imag(v)).astype(np.float64)
     mag = np.abs(v).astype(np.float64)
-    parts = np.concatenate([re.ravel(), im.ravel()]) if np.iscomplexobj(v) else re.ravel()
+    cplx = np.iscomplexobj(v)
+    parts = np.concatenate([re.ravel(), im.ravel()]) if cplx else re.ravel()
+    profiles: tuple[dict, dict] = ({}, {})
+    if axes and v.size:
+        framed = v.ndim == len(axes) + 1
+        if not framed and v.ndim != len(axes):
+            raise CompileError(f"calibration of {node!r}: values of shape {v.shape} do not have "
+                               f"the axes {axes} (optionally after a frames axis)", node=node)
+        r, i = (re, im) if framed else (re[None], im[None])
+        profiles = _axis_profiles(np.maximum(r, i), r, i if cplx else None, tuple(axes))
     return NodeCalibration(node=node, max_re=_top(re), max_im=_top(im), max_abs=_top(mag),
                            max_l1=_top(re + im), min=float(np.real(v).min()) if v.size else 0.0,
                            max=float(np.real(v).max()) if v.size else 0.0,
                            part_quantiles=_quantiles(parts), abs_quantiles=_quantiles(mag.ravel()),
-                           normalize_axes=tuple(normalize_axes))
+                           normalize_axes=tuple(normalize_axes), axis_max=profiles[0],
+                           axis_quantiles=profiles[1])
 
 
 def synthetic_inputs(graph, *, seed: int = 0) -> dict[str, np.ndarray]:

@@ -11,7 +11,10 @@ Per neuron, by the decoder's ``kind`` (registry :data:`DECODERS`):
 ``spike_table`` ``scale·table[t_s − t_ref] + offset``; ``missing`` otherwise
 ==============  ===========================================================
 
-then :func:`~compiler.snn.combine_parts` folds the trailing ``part`` axis.
+A decoder with per-index gains (``gain_axis``, ``gains``) divides every value but
+``missing`` by the gain of the neuron's index along that axis,
+``y ← y / gains[i]`` (the network carried ``gains[i]·y``), then
+:func:`~compiler.snn.combine_parts` folds the trailing ``part`` axis.
 """
 
 from __future__ import annotations
@@ -28,30 +31,33 @@ from ir.errors import NetworkError
 __all__ = ["DECODERS", "decode_outputs", "check_decoders"]
 
 
-def _spike_time(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+def _spike_time(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
     t = act.first_spike[pid]
-    return np.where(t >= 0, dec.scale * (dec.t_ref - t.astype(np.float64)) + dec.offset,
-                    dec.missing)
+    value = (dec.scale * (dec.t_ref - t.astype(np.float64)) + dec.offset) / gains
+    return np.where(t >= 0, value, dec.missing)
 
 
-def _count(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
-    return dec.scale * act.counts[pid].astype(np.float64) + dec.offset
+def _count(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
+    return (dec.scale * act.counts[pid].astype(np.float64) + dec.offset) / gains
 
 
-def _membrane(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
-    return dec.scale * act.membrane[pid].astype(np.float64) + dec.offset
+def _membrane(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
+    return (dec.scale * act.membrane[pid].astype(np.float64) + dec.offset) / gains
 
 
-def _spiked(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
+def _spiked(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
     return (act.counts[pid] > 0).astype(np.float64)
 
 
-def _spike_table(dec: Decoder, act: Activity, pid: str) -> np.ndarray:
-    return dec.table_values(act.first_spike[pid])
+def _spike_table(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
+    return dec.table_values(act.first_spike[pid], gains)
 
 
-#: Decoding functions by decoder ``kind``: ``(decoder, activity, population) -> (frames, size)``.
-DECODERS: dict[str, Callable[[Decoder, Activity, str], np.ndarray]] = {
+Decode = Callable[[Decoder, Activity, str, "np.ndarray | float"], np.ndarray]
+
+#: Decoding functions by decoder ``kind``: ``(decoder, activity, population, gains) -> (frames,
+#: size)``, ``gains`` per neuron (:meth:`~compiler.snn.Decoder.neuron_gains`) or 1.0.
+DECODERS: dict[str, Decode] = {
     "spike_time": _spike_time,
     "count": _count,
     "membrane": _membrane,
@@ -66,8 +72,9 @@ def check_decoders(network: SpikingNetwork) -> None:
     Raises
     ------
     NetworkError
-        A ``membrane`` decoder on a spike source (no membrane), or a ``combine``
-        whose population does not end with a ``part`` axis of the right size.
+        A ``membrane`` decoder on a spike source (no membrane), a ``combine``
+        whose population does not end with a ``part`` axis of the right size, or
+        gains along an axis the population lacks, along ``part``, or of the wrong length.
 
     Examples
     --------
@@ -93,13 +100,17 @@ def check_decoders(network: SpikingNetwork) -> None:
             raise NetworkError(f"decoder {dec.port!r}: combine {dec.combine!r} needs population "
                                f"{pop.id!r} to end with axis {PART_AXIS!r} of size {parts}, got "
                                f"{pop.shape}", node=dec.port)
+        if dec.gain_axis == PART_AXIS:
+            raise NetworkError(f"decoder {dec.port!r}: gains run along a value axis, not "
+                               f"{PART_AXIS!r}", node=dec.port)
+        dec.neuron_gains(pop.shape)
 
 
 def decode_outputs(
     network: SpikingNetwork,
     activity: Activity,
     framed: bool,
-    decoders: Mapping[str, Callable[[Decoder, Activity, str], np.ndarray]] = DECODERS,
+    decoders: Mapping[str, Decode] = DECODERS,
 ) -> dict[str, np.ndarray]:
     """Decode every output port of ``network`` from ``activity``.
 
@@ -130,12 +141,20 @@ def decode_outputs(
     ...                synaptic_events={})
     >>> decode_outputs(net, act, framed=False)["t"].tolist()
     [5.0, -1.0]
+
+    With gains ``(1, 4)`` along ``i`` the second neuron's value is divided by 4:
+
+    >>> net.decoders = [Decoder(port="t", population="a", kind="spike_time", t_ref=8.0,
+    ...                         missing=-1.0, gain_axis="i", gains=(1.0, 4.0))]
+    >>> act.first_spike["a"] = np.array([[3, 0]])
+    >>> decode_outputs(net, act, framed=False)["t"].tolist()
+    [5.0, 2.0]
     """
     pops = network.population
     out = {}
     for dec in network.decoders:
         pop = pops[dec.population]
-        y = decoders[dec.kind](dec, activity, pop.id)
+        y = decoders[dec.kind](dec, activity, pop.id, dec.neuron_gains(pop.shape))
         y = combine_parts(y.reshape(-1, *pop.dims), dec.combine)
         out[dec.port] = y if framed else y[0]
     return out

@@ -15,6 +15,9 @@ Policies (compile option ``calibration``):
     calibration inputs (or propagated from bound 1).  Decoded values are in
     those normalised units.
 
+Measured records also hold per-axis profiles (``axis_max``, ``axis_quantiles``,
+see :mod:`compiler.calibration`): what per-bin stage gains are set from.
+
 Bound propagation (no calibration inputs): ``window`` keeps the bound,
 ``dft``/``linear`` give ``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b``.
 
@@ -155,8 +158,8 @@ class Calibrate(Pass):
                 for node, value in evaluate(graph, frame).items():
                     if value.dtype != bool:
                         per_node.setdefault(node, []).append(value)
-            nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()))
-                     for n, v in per_node.items()}
+            nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()),
+                                axes=types[n].names) for n, v in per_node.items()}
             source = "inputs"
         else:
             bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"

@@ -48,6 +48,8 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from ir.errors import NetworkError
+
 __all__ = [
     "LatencyCode",
     "RateCode",
@@ -210,7 +212,7 @@ class Encoder(_Frozen):
 
 
 class Decoder(_Frozen):
-    """Reads values back from a population at an output port.
+    r"""Reads values back from a population at an output port.
 
     Decoder kinds (``y`` per neuron, before ``combine``):
 
@@ -223,16 +225,42 @@ class Decoder(_Frozen):
                     e.g. a companding charging schedule); ``missing`` without a spike
                     or outside the table.
 
+    Per-index gains (``gain_axis``, ``gains``): the population carries the value
+    at index ``i`` of axis ``gain_axis`` multiplied by ``gains[i]`` (a time-coded
+    stage scaled each bin to use its whole latency window), so every decoded
+    value except ``missing`` is divided by it:
+
+    .. math:: y_{\ldots i \ldots} = \frac{\mathrm{scale}\cdot(t_{ref} - t_s)
+              + \mathrm{offset}}{g_i}\quad(\texttt{spike\_time}; \text{likewise the
+              other kinds but } \texttt{spiked})
+
+    before ``combine``.  The axis is a population axis other than ``part`` and
+    ``len(gains)`` is its size (checked against the population by
+    :func:`backends.reference.decoding.check_decoders`).
+
     Parameters
     ----------
     port, population, node : str
         Output name, the population read and the radar-IR node it stands for.
-    kind : {"spike_time", "count", "membrane", "spiked"}
+    kind : {"spike_time", "count", "membrane", "spiked", "spike_table"}
     scale, offset, t_ref, missing : float
         The affine map above (``missing`` for ``spike_time`` only).
     combine : {"none", "re_im", "signed", "re_im_signed"}
         Folds the trailing ``part`` axis: ``re_im`` → ``y0 + 1j·y1``; ``signed`` →
         ``y0 − y1``; ``re_im_signed`` → ``(y0 − y1) + 1j·(y2 − y3)``.
+    table : tuple of float
+        The levels of a ``spike_table`` decoder.
+    gain_axis : str or None
+        The population axis the gains run along (None: no gains).
+    gains : tuple of float
+        Positive finite gain per index of ``gain_axis`` (empty without an axis).
+
+    Examples
+    --------
+    >>> d = Decoder(port="y", population="p", kind="count", scale=2.0, gain_axis="range",
+    ...             gains=(1.0, 4.0))
+    >>> d.neuron_gains({"doppler": 2, "range": 2}).tolist()  # memory order, range fastest
+    [1.0, 4.0, 1.0, 4.0]
     """
 
     port: str
@@ -245,6 +273,43 @@ class Decoder(_Frozen):
     combine: Split = "none"
     node: str = ""
     table: tuple[float, ...] = ()
+    gain_axis: str | None = None
+    gains: tuple[float, ...] = ()
+
+    @model_validator(mode="after")
+    def _gains(self) -> Decoder:
+        if (self.gain_axis is None) != (not self.gains):
+            raise ValueError(f"decoder {self.port!r}: gain_axis and gains go together, got "
+                             f"gain_axis={self.gain_axis!r} and {len(self.gains)} gains")
+        if self.gains and not all(np.isfinite(g) and g > 0 for g in self.gains):
+            raise ValueError(f"decoder {self.port!r}: gains must be positive and finite; got "
+                             f"{sum(not (np.isfinite(g) and g > 0) for g in self.gains)} "
+                             "bad entries")
+        if self.gains and self.kind == "spiked":
+            raise ValueError(f"decoder {self.port!r}: kind 'spiked' reads no value to divide "
+                             "by gains; drop gain_axis/gains")
+        return self
+
+    def neuron_gains(self, shape: dict[str, int]) -> np.ndarray | float:
+        """Per-neuron gains (flat, memory order) for a population of ``shape``; 1.0 without.
+
+        Raises
+        ------
+        NetworkError
+            If ``gain_axis`` is not in ``shape`` or ``gains`` does not match its size.
+        """
+        if self.gain_axis is None:
+            return 1.0
+        axes = list(shape)
+        if self.gain_axis not in axes or shape[self.gain_axis] != len(self.gains):
+            raise NetworkError(f"decoder {self.port!r}: gain_axis {self.gain_axis!r} with "
+                             f"{len(self.gains)} gains does not fit population {self.population!r} "
+                             f"of shape {dict(shape)}; give one gain per index of a "
+                             "population axis", node=self.port)
+        view = [1] * len(axes)
+        view[axes.index(self.gain_axis)] = len(self.gains)
+        g = np.asarray(self.gains, dtype=np.float64).reshape(view)
+        return np.broadcast_to(g, tuple(shape.values())).ravel()
 
     @model_validator(mode="after")
     def _finite(self) -> Decoder:
@@ -260,8 +325,9 @@ class Decoder(_Frozen):
                              f"{len(self.table)} entries and t_ref={self.t_ref}")
         return self
 
-    def table_values(self, first_spike: np.ndarray) -> np.ndarray:
-        """``spike_table`` decoding of first-spike steps (``-1``: no spike).
+    def table_values(self, first_spike: np.ndarray,
+                     gains: np.ndarray | float = 1.0) -> np.ndarray:
+        """``spike_table`` decoding of first-spike steps (``-1``: no spike), divided by ``gains``.
 
         Examples
         --------
@@ -273,8 +339,8 @@ class Decoder(_Frozen):
         k = np.asarray(first_spike, dtype=np.int64) - int(self.t_ref)
         inside = (np.asarray(first_spike) >= 0) & (k >= 0) & (k < len(self.table))
         table = np.asarray(self.table, dtype=np.float64)
-        return np.where(inside, self.scale * table[np.clip(k, 0, len(table) - 1)] + self.offset,
-                        self.missing)
+        value = self.scale * table[np.clip(k, 0, len(table) - 1)] + self.offset
+        return np.where(inside, value / gains, self.missing)
 
 
 def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
