@@ -39,7 +39,7 @@ from math import gcd, prod
 
 import numpy as np
 
-from compiler.hardware.demand import synapse_instances
+from compiler.hardware.synapses import synapse_instances
 from compiler.snn import MatrixProjection, Population, SpikingNetwork
 
 __all__ = ["Stage", "instance_neurons", "projection_repetitions", "stage_key", "stages"]

@@ -6,15 +6,10 @@ decreasing with locality.  A core holding several blocks is charged the **sum**
 of their demands (conservative: a source reaching two blocks on one core is
 counted twice, and shared weights once per block).
 
-Traffic per frame, with :math:`\hat s_S` spikes per neuron of population ``S``
-(an analytic bound, or measured from a simulation):
-
-.. math:: \text{messages} = \sum_{(c, j)} \hat s_{S(j)}\,[\text{core}(j) \ne c]
-
-over the distinct pairs (destination core ``c``, source neuron ``j`` with a
-synapse onto ``c``): one message per spike and destination core.  Messages from
-spike sources (encoders) are the host input; the others are inter-core, of
-which those crossing chips (``core // cores_per_chip``) are inter-chip.
+Traffic per frame (:mod:`compiler.passes.place_traffic`) counts one message per
+spike and destination core of every source neuron: from spike sources (encoders)
+it is the host input; the others are inter-core, of which those crossing chips
+(``core // cores_per_chip``) are inter-chip.
 
 **Time-multiplexed stages** (see :mod:`compiler.passes.split`): only one
 instance is placed and it runs :math:`R` times per frame, so messages into its
@@ -32,93 +27,27 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from compiler.hardware import BUDGETS, HardwareProfile, load_profile
 from compiler.hardware.activity import measured_spikes, spike_bound
 from compiler.passes.base import CompileContext, Pass
-from compiler.passes.split import (
-    SplitRecord,
-    describe,
-    explain_failure,
-    multiplex_candidates,
-    repetition_mode,
-    split,
-    split_program,
-)
+from compiler.passes.place_greedy import Placer, greedy_placer
+from compiler.passes.place_traffic import block_affinity, spike_traffic
+from compiler.passes.split import split, split_program
+from compiler.passes.split_budget import explain_failure
+from compiler.passes.split_plan import multiplex_candidates, repetition_mode
+from compiler.passes.split_record import SplitRecord, describe
 from compiler.program import CompiledProgram
 from compiler.snn import SpikingNetwork
 from ir.errors import BudgetError
 
+# Placer and greedy_placer live in place_greedy; importable from here too
 __all__ = ["Place", "Placement", "Placer", "greedy_placer", "place"]
-
-#: ``placer(demand (n, 4), limits (4,), affinity (n, n), n_cores or None) -> core (n,)``,
-#: core ``-1`` for a block that does not fit in ``n_cores``.
-Placer = Callable[[np.ndarray, np.ndarray, object, int | None], np.ndarray]
-
-
-def greedy_placer(demand: np.ndarray, limits: np.ndarray, affinity,
-                  n_cores: int | None) -> np.ndarray:
-    """First-fit decreasing with locality.
-
-    Blocks are taken in order of decreasing dominant share ``max(demand / limits)``
-    rounded to 5 % buckets, and within a bucket in Cuthill-McKee order of
-    the affinity graph (connected blocks next to each other).  Each goes to the
-    first core with room among, first, the cores of the blocks it exchanges most
-    synapses with (``affinity``, heaviest first), then all open cores in order;
-    else a new core is opened.  Deterministic.
-
-    Parameters
-    ----------
-    demand : ndarray, shape (n, 4)
-        Per block amounts in :data:`~compiler.hardware.BUDGETS` order.
-    limits : ndarray, shape (4,)
-        Per core limits (``inf`` = unbounded).
-    affinity : sparse or dense (n, n)
-        Symmetric weights between blocks (distinct source-target neuron pairs).
-    n_cores : int or None
-        Cores available (``None``: unbounded).
-
-    Returns
-    -------
-    ndarray of int
-        The core of each block; ``-1`` where none was left.
-    """
-    n = len(demand)
-    if n == 0:  # nothing to place (a program without spiking stages)
-        return np.zeros(0, np.int64)
-    share = np.where(np.isfinite(limits), demand / np.where(np.isfinite(limits), limits, 1), 0)
-    aff = sp.csr_matrix(affinity)
-    rank = np.empty(n, np.int64)
-    rank[reverse_cuthill_mckee(aff, symmetric_mode=True)[::-1]] = np.arange(n)  # Cuthill-McKee
-    bucket = np.round(share.max(axis=1, initial=0.0) * 20)
-    order = np.lexsort((rank, -bucket))
-    core = np.full(n, -1, np.int64)
-    free = np.empty((0, demand.shape[1]))
-    for b in order:
-        d = demand[b]
-        lo, hi = aff.indptr[b], aff.indptr[b + 1]
-        nbr, w = aff.indices[lo:hi], aff.data[lo:hi]
-        placed = nbr[core[nbr] >= 0]
-        cand = core[placed[np.argsort(-w[core[nbr] >= 0], kind="stable")]]
-        fits_all = np.all(free >= d, axis=1)
-        pick = next((c for c in cand if fits_all[c]), None)
-        if pick is None and fits_all.any():
-            pick = int(np.argmax(fits_all))
-        if pick is None:
-            if n_cores is not None and len(free) >= n_cores:
-                continue
-            free = np.vstack([free, limits])
-            pick = len(free) - 1
-        free[pick] -= d
-        core[b] = pick
-    return core
 
 
 @dataclass
@@ -177,56 +106,6 @@ class Placement:
                 "traffic": self.traffic, "multiplexed": self.multiplexed}
 
 
-def _affinity(splits, offsets) -> sp.csr_matrix:
-    rows, cols = [], []
-    for k, rec in enumerate(splits):
-        for tgt, dem in rec.demand.items():
-            for src, (blk, neuron) in dem.reach.items():
-                if not rec.on_chip(src, tgt):
-                    continue
-                rows.append(offsets[k][tgt] + blk)
-                cols.append(offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron))
-    n = max((o[p] + d.blocks.n_blocks for o, r in zip(offsets, splits, strict=True)
-             for p, d in r.demand.items()), default=0)
-    if not rows:
-        return sp.csr_matrix((n, n))
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    m = sp.coo_matrix((np.ones(r.size), (r, c)), shape=(n, n)).tocsr()
-    m = m + m.T
-    m.setdiag(0)
-    m.eliminate_zeros()
-    return m
-
-
-def _traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
-    host = inter = chip_x = buffered = 0.0
-    for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
-        pops = net.population
-        for tgt, dem in rec.demand.items():
-            for src, (blk, neuron) in dem.reach.items():
-                dst = core[offsets[k][tgt] + blk]
-                keys = np.unique(dst * pops[src].size + neuron)
-                dst, neuron = keys // pops[src].size, keys % pops[src].size
-                rate = spikes[k].get(src, 0.0) * rec.runs(tgt)
-                if src not in rec.demand:
-                    host += rate * dst.size
-                    continue
-                if not rec.on_chip(src, tgt):
-                    buffered += rate * dst.size
-                    continue
-                home = core[offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron)]
-                away = home != dst
-                inter += rate * int(away.sum())
-                if cores_per_chip:
-                    chip_x += rate * int((away & (home // cores_per_chip
-                                                  != dst // cores_per_chip)).sum())
-    missing = sorted({f"{networks[k].name}/{pid}" for k, rec in enumerate(splits)
-                      for pid, dem in rec.demand.items()
-                      if networks[k].incoming(pid) and not dem.reach})
-    return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
-            "buffered": buffered, "not_counted": missing}
-
-
 def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
           profile: HardwareProfile | None = None, *, placer: Placer = greedy_placer,
           sim_results: Sequence | None = None) -> Placement:
@@ -276,7 +155,7 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
         offsets.append(off)
     demand_arr = np.concatenate(demand).astype(np.float64) if demand else np.zeros((0, 4))
     limits = profile.limits()
-    core = np.asarray(placer(demand_arr, limits, _affinity(splits, offsets),
+    core = np.asarray(placer(demand_arr, limits, block_affinity(splits, offsets),
                              profile.n_cores), dtype=np.int64)
     if (core < 0).any():
         k, pid, _ = items[int(np.argmax(core < 0))]
@@ -294,7 +173,7 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
     spikes = ([measured_spikes(n, s) for n, s in zip(networks, sim_results, strict=True)]
               if sim_results is not None else [spike_bound(n) for n in networks])
     cpc = profile.cores_per_chip
-    traffic = _traffic(networks, splits, offsets, core, cpc, spikes)
+    traffic = spike_traffic(networks, splits, offsets, core, cpc, spikes)
     traffic["basis"] = "measured" if sim_results is not None else "bound"
     chip = core // cpc if cpc else np.zeros_like(core)
     mux = [{"network": rec.network, "stage": key, "repetitions": r}

@@ -9,7 +9,7 @@ For a population the starting block count is NengoLoihi's rule
 
 evaluated on the worst block (a fan-in that does not shrink with the block, as a
 dense matrix's, makes it grow); the blocks (equal sizes ±1, contiguous in memory
-order) are then measured exactly with :func:`compiler.hardware.block_demand`,
+order) are then measured exactly (:class:`compiler.hardware.demand.DemandModel`),
 ``n`` grows until every block fits, and a bisection returns the smallest such
 ``n`` found.  What cannot fit even one neuron per core, or a network larger than
 all cores, raises :class:`~ir.errors.BudgetError` naming the IR node and motif.
@@ -40,180 +40,37 @@ needs by its neurons and unshared synapse bits) until the program fits.
 from __future__ import annotations
 
 from collections.abc import Collection, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from math import ceil
 from typing import ClassVar
 
 import numpy as np
 
 from compiler.hardware import BUDGETS, Blocks, HardwareProfile, load_profile
-from compiler.hardware.demand import Demand, block_demand, synapse_instances
+from compiler.hardware.demand import Demand, demand_model, synapse_instances
 from compiler.hardware.repetition import Stage, instance_neurons, stage_key, stages
 from compiler.passes.base import CompileContext, Pass
+from compiler.passes.split_budget import check_totals, explain_failure, fits, too_big
+from compiler.passes.split_plan import (
+    REPETITION_MODES,
+    multiplex_candidates,
+    plan,
+    repetition_mode,
+)
+from compiler.passes.split_record import SplitRecord, describe
 from compiler.program import CompiledProgram
 from compiler.snn import Population, SpikingNetwork
 from ir.errors import BudgetError, CompileError
 
+# REPETITION_MODES, SplitRecord, describe, explain_failure, multiplex_candidates and
+# repetition_mode live in split_plan / split_record / split_budget; importable from here too
 __all__ = ["REACH_LIMIT", "REPETITION_MODES", "Split", "SplitRecord", "describe",
-           "explain_failure", "multiplex_candidates", "repetition_mode", "split", "split_program"]
-
-#: Values of the ``repetitions`` compile option.
-REPETITION_MODES: tuple[str, ...] = ("auto", "spatial", "temporal")
+           "explain_failure", "multiplex_candidates", "repetition_mode", "split", "split_program",
+           "split_population"]
 
 #: Without a fan-in budget, fan-in lines (and so the spike traffic) are counted only for
 #: populations receiving at most this many synapse instances.
 REACH_LIMIT = 1 << 27
-
-_BUDGET_TEXT = {
-    "neurons": "neurons",
-    "input_axons": "input axons (fan-in lines)",
-    "output_axons": "output axons (fan-out lines)",
-    "synapse_bits": "bits of synaptic memory",
-}
-_SUGGEST = {
-    "neurons": "use more cores or chips (a profile file with a larger 'chips'), or run the "
-               "largest stages on the host",
-    "input_axons": "reduce the fan-in (a smaller window or a sparser matrix, e.g. the radix-4 "
-                   "S-FFT instead of a dense DFT) or use a target with more input axons per core",
-    "output_axons": "let each neuron drive fewer target populations, or use a target with more "
-                    "output axons per core",
-    "synapse_bits": "store fewer or narrower synapses (fewer training cells, a sparser matrix), "
-                    "or use a target with more synaptic memory or shared weights",
-}
-
-
-def describe(pop: Population) -> str:
-    """How error messages name a population: its IR node and motif when known.
-
-    Examples
-    --------
-    >>> describe(Population(id="det", shape={"r": 2}, origin={"node": "det", "motif": "os_cfar"}))
-    "node 'det' (motif os_cfar, population 'det')"
-    >>> describe(Population(id="y", shape={"r": 2}))
-    "population 'y'"
-    """
-    if "node" not in pop.origin:
-        return f"population {pop.id!r}"
-    return (f"node {pop.origin['node']!r} (motif {pop.origin.get('motif', '?')}, "
-            f"population {pop.id!r})")
-
-
-@dataclass
-class SplitRecord:
-    """The blocks of every neuron population of one network, with their measured demand.
-
-    Attributes
-    ----------
-    network : str
-        The network's name.
-    profile : str
-        The profile's name.
-    demand : dict of str to Demand
-        Per neuron population (in population order): its blocks and per-block amounts.
-        For a population of a multiplexed stage the blocks cover one instance
-        (``blocks.neurons``), and every neuron of that instance is in exactly one block.
-    multiplexed : dict of str to int
-        Time-multiplexed stages (IR node) and their repetitions per frame.
-    stage_of : dict of str to str
-        The stage of each neuron population.
-    """
-
-    network: str
-    profile: str
-    demand: dict[str, Demand] = field(default_factory=dict)
-    multiplexed: dict[str, int] = field(default_factory=dict)
-    stage_of: dict[str, str] = field(default_factory=dict)
-
-    def runs(self, population: str) -> int:
-        """Runs per frame of the placed blocks of ``population`` (``R`` if multiplexed, else 1)."""
-        return self.multiplexed.get(self.stage_of.get(population, ""), 1)
-
-    def on_chip(self, source: str, target: str) -> bool:
-        """Whether synapses ``source → target`` join placed neurons that run together.
-
-        True when both are placed and either both are spatial or both belong to one
-        multiplexed stage; otherwise the source's spikes come from the host or the
-        frame buffer of a multiplexed stage.
-        """
-        if source not in self.demand:
-            return False
-        mux = self.runs(source) > 1 or self.runs(target) > 1
-        return not mux or self.stage_of[source] == self.stage_of[target]
-
-    @property
-    def blocks(self) -> dict[str, Blocks]:
-        """The blocks of each neuron population."""
-        return {k: d.blocks for k, d in self.demand.items()}
-
-    @property
-    def n_blocks(self) -> int:
-        """Blocks over all populations."""
-        return sum(d.blocks.n_blocks for d in self.demand.values())
-
-    def to_dict(self) -> dict:
-        """A JSON-able summary: blocks and the largest block's amounts per population."""
-        return {"network": self.network, "profile": self.profile,
-                "multiplexed": dict(self.multiplexed), "populations": {
-                    k: {"blocks": d.blocks.n_blocks, "neurons_placed": d.blocks.n_neurons,
-                        "multiplexed": self.runs(k) > 1,
-                        "max_per_block": dict(zip(BUDGETS, d.amounts.max(axis=0).tolist(),
-                                                  strict=True)),
-                        "stored_synapses": int(d.entries.sum())}
-                    for k, d in self.demand.items()}}
-
-
-def _fits(amounts: np.ndarray, limits: np.ndarray) -> tuple[bool, float]:
-    ratio = float((amounts / limits).max()) if amounts.size else 0.0
-    return ratio <= 1.0, ratio
-
-
-def _resident(stage: Stage, multiplexed: Collection[str], shared: bool) -> tuple[int, int]:
-    """Neurons and stored synapse entries (a lower bound) of a stage as placed."""
-    r = stage.repetitions if stage.key in multiplexed else 1
-    return stage.neurons // r, stage.synapses_stored if shared else stage.synapse_instances // r
-
-
-def _check_totals(networks: Sequence[SpikingNetwork], profile: HardwareProfile,
-                  multiplexed: Sequence[Collection[str]], what: str,
-                  stage_lists: Sequence[list[Stage]] | None = None) -> None:
-    """Raise when the resident neurons or synapse bits exceed all cores together."""
-    cores = profile.n_cores
-    if cores is None:
-        return
-    limits = profile.limits()
-    shared = profile.shared_weights_per_core
-    stage_lists = stage_lists or [stages(n) for n in networks]
-    rows = [(net, st, *_resident(st, mux, shared))
-            for net, mux, sts in zip(networks, multiplexed, stage_lists, strict=True)
-            for st in sts]
-    need = {"neurons": sum(r[2] for r in rows),
-            "synapse_bits": sum(r[3] for r in rows) * profile.bits_per_synapse}
-    # the budget that needs the most cores is the one to report
-    budget = max(need, key=lambda b: need[b] / limits[BUDGETS.index(b)])
-    amount, limit = need[budget], limits[BUDGETS.index(budget)]
-    if amount > limit * cores:
-        net, st, n_res, _ = max(rows, key=lambda r: r[2])
-        biggest = net.population[st.populations[0]]
-        inst = (f" (one instance of {st.repetitions:,})"
-                if any(st.key in m for m in multiplexed) else "")
-        n = ceil(amount / limit)
-        raise BudgetError(
-            f"{what} needs {amount:,} {_BUDGET_TEXT[budget]} but "
-            f"{profile.name} has {int(limit):,} per core x {cores} cores = "
-            f"{int(limit * cores):,}: at least {n:,} cores "
-            f"({ceil(n / profile.cores_per_chip):,} chips of {profile.cores_per_chip} cores, "
-            f"{profile.chips} available); the largest population is {describe(biggest)} with "
-            f"{n_res:,} neurons{inst}; {_SUGGEST[budget]}", node=biggest.origin.get("node"))
-
-
-def _too_big(pop: Population, profile: HardwareProfile, amounts: np.ndarray,
-             limits: np.ndarray) -> BudgetError:
-    worst = np.unravel_index(np.argmax(amounts / limits), amounts.shape)
-    budget = BUDGETS[worst[1]]
-    return BudgetError(
-        f"{describe(pop)}: even one neuron per core needs {int(amounts[worst]):,} "
-        f"{_BUDGET_TEXT[budget]}, {profile.name} allows {int(limits[worst[1]]):,} per core; "
-        f"{_SUGGEST[budget]}", node=pop.origin.get("node", pop.id))
 
 
 def split_population(network: SpikingNetwork, pop: Population, profile: HardwareProfile,
@@ -233,41 +90,45 @@ def split_population(network: SpikingNetwork, pop: Population, profile: Hardware
     size = pop.size if neurons is None else len(neurons)
     runs = pop.size // size  # the blocks hold 1/runs of every projection's instances
     instances = sum(synapse_instances(p, pops) for p in network.incoming(pop.id)) // runs
-    # fan-in lines are counted when budgeted, or when cheap enough to give the spike traffic
-    reach = bool(np.isfinite(limits[1])) or instances <= REACH_LIMIT
+    # fan-in lines are measured while searching only when budgeted; they are counted for the
+    # result when budgeted, or when cheap enough to give the spike traffic
+    budgeted = bool(np.isfinite(limits[1]))
+    reach = budgeted or instances <= REACH_LIMIT
+    model = demand_model(network, pop.id, neurons,
+                         shared_weights=profile.shared_weights_per_core)
+    bits = profile.bits_per_synapse
 
-    def measure(n: int) -> Demand:
-        return block_demand(network, pop.id, Blocks.uniform(pop.id, size, n, neurons=neurons),
-                            bits_per_synapse=profile.bits_per_synapse,
-                            shared_weights=profile.shared_weights_per_core, reach=reach)
+    def blocks(n: int) -> Blocks:
+        return Blocks.uniform(pop.id, size, n, neurons=neurons)
+
+    def measure(n: int) -> np.ndarray:
+        return model.amounts(blocks(n), bits_per_synapse=bits, fan_in=budgeted)
 
     n = ceil(size / limits[0]) if np.isfinite(limits[0]) else 1
     bad = 0
     if not profile.shared_weights_per_core and np.isfinite(limits[3]):
         # unshared entries sum to the same total for any split: a lower bound on n
-        bits = profile.bits_per_synapse * instances
-        n = max(n, min(size, ceil(bits / limits[3])))
+        n = max(n, min(size, ceil(bits * instances / limits[3])))
         bad = n - 1
     attempts = 0
     while True:
         attempts += 1
-        d = measure(n)
-        ok, ratio = _fits(d.amounts, limits)
+        amounts = measure(n)
+        ok, ratio = fits(amounts, limits)
         if ok:
             break
         if n == size:
-            raise _too_big(pop, profile, d.amounts, limits)
+            raise too_big(pop, profile, amounts, limits)
         bad = max(bad, n)
         step = 1 if attempts <= 3 else max(1, n // 8)  # creep first, then grow geometrically
         n = min(size, max(ceil(n * ratio), n + step, bad + 1))
     while n - bad > 1:  # smallest fitting n in (bad, n]
         mid = (bad + n) // 2
-        d_mid = measure(mid)
-        if _fits(d_mid.amounts, limits)[0]:
-            n, d = mid, d_mid
+        if fits(measure(mid), limits)[0]:
+            n = mid
         else:
             bad = mid
-    return d
+    return model.demand(blocks(n), bits_per_synapse=bits, reach=reach)
 
 
 def split(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
@@ -295,7 +156,7 @@ def split(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
         A stage in ``multiplexed`` does not exist or cannot be multiplexed.
     """
     profile = load_profile(profile)
-    _check_totals([network], profile, [multiplexed], f"network {network.name!r}")
+    check_totals([network], profile, [multiplexed], f"network {network.name!r}")
     return _split_network(network, profile, multiplexed)
 
 
@@ -325,70 +186,6 @@ def _split_network(network: SpikingNetwork, profile: HardwareProfile,
         neurons = instance_neurons(pop, by_key[key].axes) if key in multiplexed else None
         record.demand[pid] = split_population(network, pop, profile, neurons)
     return record
-
-
-def multiplex_candidates(networks: Sequence[SpikingNetwork], profile: HardwareProfile,
-                         stage_lists: Sequence[list[Stage]] | None = None
-                         ) -> list[tuple[int, Stage]]:
-    """Multiplexable stages of all ``networks`` as ``(network index, stage)``, largest first.
-
-    Size = the cores the stage's neurons and unshared synapse bits need at least
-    (unbounded budgets count 0); ties: more repetitions first, then network order.
-
-    Examples
-    --------
-    >>> from compiler.hardware.reference_networks import dft_network
-    >>> [(k, s.key, s.repetitions) for k, s in multiplex_candidates([dft_network()],
-    ...                                                            load_profile("loihi"))]
-    [(0, 'rng', 256)]
-    """
-    limits = profile.limits()
-    finite = np.where(np.isfinite(limits), limits, np.inf)
-    found = []
-    for k, sts in enumerate(stage_lists or [stages(n) for n in networks]):
-        for i, st in enumerate(sts):
-            if st.multiplexable:
-                size = max(st.neurons / finite[0],
-                           st.synapse_instances * profile.bits_per_synapse / finite[3])
-                found.append((-size, -st.repetitions, k, i, st))
-    return [(k, st) for *_, k, _, st in sorted(found, key=lambda f: f[:4])]
-
-
-def repetition_mode(options) -> str:
-    """The ``repetitions`` option (default ``"auto"``), checked.
-
-    Raises
-    ------
-    CompileError
-        Not one of :data:`REPETITION_MODES`.
-    """
-    mode = options.get("repetitions") or "auto"
-    if mode not in REPETITION_MODES:
-        raise CompileError(f"compile option 'repetitions' = {mode!r} is not one of "
-                           f"{', '.join(REPETITION_MODES)}")
-    return mode
-
-
-def _plan(networks, chosen: list[tuple[int, Stage]]) -> list[set[str]]:
-    sets: list[set[str]] = [set() for _ in networks]
-    for k, st in chosen:
-        sets[k].add(st.key)
-    return sets
-
-
-def explain_failure(err: BudgetError, chosen: list[tuple[int, Stage]], mode: str,
-                    n_candidates: int) -> BudgetError:
-    """``err`` with what the repetition mode tried, and what else could help."""
-    if chosen:
-        runs = ", ".join(f"{st.key} x{st.repetitions:,}" for _, st in chosen)
-        extra = (f" — even with every repeated stage time-multiplexed (one instance each of "
-                 f"{runs}); what does not fit is not repeated, so shrink it or add chips")
-    elif mode == "spatial" and n_candidates:
-        extra = (f"; or time-multiplex the {n_candidates} repeated stage(s) (compile option "
-                 "repetitions='auto' or 'temporal', CLI --repetitions)")
-    else:
-        extra = ""
-    return BudgetError(f"{err}{extra}", node=err.node)
 
 
 def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile | None = None,
@@ -436,23 +233,28 @@ def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile |
             f"the program (networks {', '.join(repr(x.name) for x in networks)})")
     cap = profile.limits() * (profile.n_cores or np.inf)
     for n in counts:
-        plan = _plan(networks, cands[:n])
+        chosen = plan(networks, cands[:n])
         try:
-            _check_totals(networks, profile, plan, what, stage_lists)
+            check_totals(networks, profile, chosen, what, stage_lists)
         except BudgetError as err:
             if n == counts[-1]:
                 raise explain_failure(err, cands[:n], repetitions, len(cands)) from None
             continue
         records, used = [], np.zeros(len(BUDGETS))
-        for net, mux, sts in zip(networks, plan, stage_lists, strict=True):
+        for net, mux, sts in zip(networks, chosen, stage_lists, strict=True):
             records.append(_split_network(net, profile, mux, sts))
-            used += sum(d.amounts.sum(axis=0) for d in records[-1].demand.values())
+            used += sum(_known(d, cap).sum(axis=0) for d in records[-1].demand.values())
             # a core is charged the sum of its blocks: a sum over all cores' limits never fits
             if n != counts[-1] and np.any(used > cap):
                 break
         else:
             return records
     return records
+
+
+def _known(demand: Demand, cap: np.ndarray) -> np.ndarray:
+    """A demand's amounts; fan-in lines still pending only when their cap is unbounded."""
+    return demand.amounts if np.isfinite(cap[1]) else demand.amounts_counted
 
 
 @dataclass(frozen=True)

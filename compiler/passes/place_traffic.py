@@ -1,0 +1,79 @@
+r"""Block affinity and spike traffic of a placement (the ``place`` pass).
+
+The **affinity** of two blocks is the number of distinct (source neuron, target
+block) pairs between them, in both directions; the greedy placer keeps such
+blocks together.  **Traffic** per frame, with :math:`\hat s_S` spikes per neuron of
+population ``S``:
+
+.. math:: \text{messages} = \sum_{(c, j)} \hat s_{S(j)}\,[\text{core}(j) \ne c]
+
+over the distinct pairs (destination core ``c``, source neuron ``j`` with a
+synapse onto ``c``), counted :math:`R` times into the blocks of a stage
+multiplexed :math:`R` times; messages from spike sources are ``host_input``, those
+across a multiplexed stage's boundary ``buffered``, the others ``inter_core``, of
+which those crossing chips are ``inter_chip``.
+
+Both read the reached ``(block, source neuron)`` pairs of every
+:class:`~compiler.hardware.Demand`; ``offsets[k][pid]`` is the index of the first
+block of population ``pid`` of network ``k`` among all placed blocks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from compiler.hardware.intsets import unique_keys
+
+__all__ = ["block_affinity", "spike_traffic"]
+
+def block_affinity(splits, offsets) -> sp.csr_matrix:
+    """Symmetric ``(blocks × blocks)`` affinity of the placed blocks of all ``splits``."""
+    rows, cols = [], []
+    for k, rec in enumerate(splits):
+        for tgt, dem in rec.demand.items():
+            for src, (blk, neuron) in dem.reach.items():
+                if not rec.on_chip(src, tgt):
+                    continue
+                rows.append(offsets[k][tgt] + blk)
+                cols.append(offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron))
+    n = max((o[p] + d.blocks.n_blocks for o, r in zip(offsets, splits, strict=True)
+             for p, d in r.demand.items()), default=0)
+    if not rows:
+        return sp.csr_matrix((n, n))
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    m = sp.coo_matrix((np.ones(r.size), (r, c)), shape=(n, n)).tocsr()
+    m = m + m.T
+    m.setdiag(0)
+    m.eliminate_zeros()
+    return m
+
+
+def spike_traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
+    """Messages per frame of the placement ``core`` (see the module docstring)."""
+    host = inter = chip_x = buffered = 0.0
+    for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
+        pops = net.population
+        for tgt, dem in rec.demand.items():
+            for src, (blk, neuron) in dem.reach.items():
+                dst = core[offsets[k][tgt] + blk]
+                keys = unique_keys(dst * pops[src].size + neuron)
+                dst, neuron = keys // pops[src].size, keys % pops[src].size
+                rate = spikes[k].get(src, 0.0) * rec.runs(tgt)
+                if src not in rec.demand:
+                    host += rate * dst.size
+                    continue
+                if not rec.on_chip(src, tgt):
+                    buffered += rate * dst.size
+                    continue
+                home = core[offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron)]
+                away = home != dst
+                inter += rate * int(away.sum())
+                if cores_per_chip:
+                    chip_x += rate * int((away & (home // cores_per_chip
+                                                  != dst // cores_per_chip)).sum())
+    missing = sorted({f"{networks[k].name}/{pid}" for k, rec in enumerate(splits)
+                      for pid, dem in rec.demand.items()
+                      if networks[k].incoming(pid) and not dem.reach})
+    return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
+            "buffered": buffered, "not_counted": missing}
