@@ -47,6 +47,7 @@ import numpy as np
 from backends.reference.delivery import Delivery
 from backends.reference.encoding import Train
 from backends.reference.neuron import NeuronState, Segment, StepParams, neuron_step
+from backends.reference.order import first_spike_steps, order_by_step
 from backends.reference.plan import SimPlan
 from backends.reference.result import Activity
 from compiler.snn.network import SpikingNetwork
@@ -162,10 +163,7 @@ def run_closed(
         flat, step = spikes[pid]
         n = n_frames * pop.size
         counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
-        once, at = np.unique(flat, return_index=True)
-        first_pid = np.full(n, -1, np.int64)
-        first_pid[once] = step[at]
-        first[pid] = first_pid.reshape(n_frames, -1)
+        first[pid] = first_spike_steps(flat, step, n).reshape(n_frames, -1)
         if rasters is not None:
             rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
             f, i = np.divmod(flat, pop.size)
@@ -201,7 +199,7 @@ def _solve(
                 part = seg._replace(start=s0, stop=min(s0 + block, seg.stop))
                 u, v = _driven(u, v, first, part, params, arrivals, n_frames, pop.dims)
     flat = np.flatnonzero(first >= 0)
-    order = np.lexsort((flat, first[flat]))
+    order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
     return (flat[order], first[flat][order]), v.reshape(n_frames, -1)
 
 

@@ -1,0 +1,41 @@
+"""Ordering spike events by step: a stable linear-time sort where the step range allows.
+
+Spike steps are small non-negative integers (``< n_steps``), so a stable sort of
+them can use numpy's radix sort (``kind="stable"`` on 16-bit integers) instead
+of a comparison sort: :func:`order_by_step` is the permutation that sorts
+events by step, ties kept in their given order.
+
+Examples
+--------
+>>> import numpy as np
+>>> order_by_step(np.array([3, 1, 3, 0]), n_steps=4).tolist()
+[3, 1, 0, 2]
+>>> first_spike_steps(np.array([2, 0, 2]), np.array([1, 4, 5]), 3).tolist()
+[4, -1, 1]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["first_spike_steps", "order_by_step"]
+
+
+def order_by_step(steps: np.ndarray, n_steps: int) -> np.ndarray:
+    """The stable permutation sorting ``steps`` (ints in ``[0, n_steps)``) ascending."""
+    if n_steps <= np.iinfo(np.uint16).max:
+        return np.argsort(steps.astype(np.uint16), kind="stable")
+    return np.argsort(steps, kind="stable")
+
+
+def first_spike_steps(flat: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
+    """First spike step of each of ``n`` neurons (``-1``: none) from events sorted by step."""
+    first = np.full(n, -1, np.int64)
+    if flat.size == 0:
+        return first
+    if np.bincount(flat, minlength=n).max() <= 1:  # at most one spike each (fire-once)
+        first[flat] = step
+        return first
+    once, at = np.unique(flat, return_index=True)
+    first[once] = step[at]
+    return first
