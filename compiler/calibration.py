@@ -9,7 +9,7 @@ encoder ranges and thresholds from ``max_part · headroom`` with
 
 .. math:: \text{max\_part} = \max(\max|\mathrm{Re}\,x|, \max|\mathrm{Im}\,x|).
 
-*Axis profiles* (for per-bin stage gains, see :mod:`compiler.lowering.dft_time`):
+*Axis profiles* (for per-bin stage gains, see :mod:`compiler.lowering.stage_gains`):
 for every axis ``a`` of a measured node, ``axis_max[a][i]`` is the largest part
 ``p = max(|Re x|, |Im x|)`` at index ``i`` of ``a`` (over all other axes and
 frames), and ``axis_quantiles[a]`` are the quantiles of the ``|Re|, |Im|`` parts

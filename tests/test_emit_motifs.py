@@ -15,6 +15,7 @@ from backends.emit.numpy_host import emit_host
 from backends.emit.package import PackageBuilder
 from backends.emit.run_package import run_package
 from backends.reference import run_program, simulate
+from compiler.classifier import classify, save_weights
 from compiler.compile import compile_graph
 from compiler.snn import (
     Decoder,
@@ -31,6 +32,7 @@ from compiler.snn import (
 from ir import Graph
 from ir.errors import CompileError
 from ir.ops import Magnitude
+from ir.ops.classify import LIF, Classifier, Conv2d, Integrator, LevelsEncoding, Pool, Recurrent
 from ir.types import TensorType
 
 
@@ -79,10 +81,11 @@ def test_cfar_motifs_match_the_reference(params, tmp_path):
         {"id": "o", "op": "output", "input": "det"}]})
     rng = np.random.default_rng(2)
     cal = rng.exponential(size=tuple(shape.values()))
+    cal.flat[3] = 40.0  # the calibration covers the strong cell (inside the code's range)
     program = compile_graph(g, None, calibration_inputs={"x": cal})
     assert [s.kind for s in program.segments][0] == "spiking"
     x = rng.exponential(size=tuple(shape.values()))
-    x.flat[3] = 40.0
+    x.flat[3] = 30.0
     _check_program(program, {"x": x}, tmp_path)
 
 
@@ -175,6 +178,34 @@ def test_stencil_with_delays_and_latency_log_code(tmp_path):
     out, counts = run_package(emit_numpy(net, tmp_path), {"x": x})
     _same(out, ref.outputs)
     assert counts == [ref.spike_counts]
+
+
+def test_classifier_motif_matches_the_reference(tmp_path):
+    """Conv (stride 2, padding 1) → max pool → recurrent LIF (value reset) → integrator,
+    one step per frame, frames arriving through delayed relays (motif ``snn``)."""
+    op = Classifier(num_classes=3, weights=str(tmp_path / "w.npz"),
+                    encoding=LevelsEncoding(levels=(1.0,)),
+                    layers=(Conv2d(channels=3, kernel=(3, 3), stride=(2, 2), padding=(1, 1),
+                                   neuron=LIF(dv=0.25)),
+                            Pool(mode="max", size=(2, 2)),
+                            Recurrent(units=5, neuron=LIF(dv=0.125, reset="value")),
+                            Integrator(units=3, dv=0.5)))
+    rng = np.random.default_rng(8)
+    w = {k: np.round(rng.normal(0, 0.7, s) * 8) / 8  # dyadic: exact sums
+         for k, s in op.weight_shapes("c", (8, 6)).items()}
+    save_weights(tmp_path / "w.npz", w)
+    g = Graph.from_dict({"name": "clf", "nodes": [
+        {"id": "roi", "op": "input", "shape": {"object": 3, "frame": 5, "doppler": 6,
+                                               "range": 8}, "domain": "db"},
+        {"id": "cls", "op": "classifier", "input": "roi", **op.params()},
+        {"id": "out", "op": "output", "input": "cls"}]})
+    program = compile_graph(g, None)
+    assert [s.kind for s in program.segments] == ["spiking", "host"]
+    x = rng.uniform(0.0, 2.0, size=(3, 5, 6, 8))  # inside the code's range [0, 2]
+    counts = _check_program(program, {"roi": x}, tmp_path / "pkg")
+    assert all(counts[0][f"cls/l{i}"] > 0 for i in range(3))
+    ref = classify(op, w, np.swapaxes(x, 2, 3))  # (and the spiking network is the model)
+    assert counts[0]["cls/input"] == ref.input_spikes.sum()
 
 
 def test_an_op_without_host_emitter_is_refused_naming_the_node():

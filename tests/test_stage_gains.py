@@ -23,7 +23,7 @@ from compiler.chains import range_doppler_chain
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.lowering import default_registry
 from compiler.lowering.dft_common import real_weights
-from compiler.lowering.dft_time import exact_weight_bits, index_levels
+from compiler.lowering.stage_gains import exact_weight_bits, index_levels
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
 from compiler.passes.fuse_linear import FuseLinear

@@ -11,7 +11,9 @@ operation (:mod:`compiler.snn.neurons` is the equation):
   reference plan (:func:`backends.reference.build_plan`): the same delay
   classes, the same dense or CSR operands, the same summation order;
 * encoders and decoders repeat :mod:`compiler.snn.coding`'s formulas with the
-  code's constants folded.
+  code's constants folded; a decoder with per-index gains divides by them as
+  :mod:`backends.reference.decoding` does (``(scale·… + offset) / gains``, before
+  ``combine``).
 
 The step loop that calls them is :mod:`backends.emit.numpy_loop`.
 """
@@ -191,12 +193,13 @@ def decode_function(pkg: PackageBuilder, module: str, dec: Decoder, pop: Populat
     fn = pkg.function(module, "decode_", dec.port)
     a = dict(scale=lit(dec.scale), offset=lit(dec.offset), missing=lit(dec.missing))
     if dec.kind == "spike_time":
-        body = render("t = activity.astype(np.float64)\nvalue = $scale * ($t_ref - t) + $offset\n"
-                      "y = np.where(activity >= 0, value, $missing)", t_ref=lit(dec.t_ref), **a)
-    elif dec.kind == "count":
-        body = render("y = $scale * activity.astype(np.float64) + $offset", **a)
-    elif dec.kind == "membrane":
-        body = render("y = $scale * activity.astype(np.float64) + $offset", **a)
+        value = _gained(dec, render("$scale * ($t_ref - t) + $offset", t_ref=lit(dec.t_ref),
+                                    **a))
+        body = render("t = activity.astype(np.float64)\nvalue = $value\n"
+                      "y = np.where(activity >= 0, value, $missing)", value=value, **a)
+    elif dec.kind in ("count", "membrane"):
+        body = render("y = $value", value=_gained(
+            dec, render("$scale * activity.astype(np.float64) + $offset", **a)))
     elif dec.kind == "spiked":
         body = render("y = (activity > 0).astype(np.float64)")
     else:
@@ -205,9 +208,35 @@ def decode_function(pkg: PackageBuilder, module: str, dec: Decoder, pop: Populat
             "key = $key\ntable = _kernels.array(key, 0, \"table\")\nk = activity - $t_ref\n"
             "inside = (activity >= 0) & (k >= 0) & (k < table.size)\n"
             "entry = table[np.clip(k, 0, table.size - 1)]\nvalue = $scale * entry + $offset\n"
-            "y = np.where(inside, value, $missing)", key=lit(key), t_ref=lit(int(dec.t_ref)), **a)
+            "y = np.where(inside, $value, $missing)", key=lit(key),
+            t_ref=lit(int(dec.t_ref)),
+            value=render("value") if dec.gain_axis is None else render("value / gains"), **a)
+    if dec.gain_axis is not None:
+        body = join([_gains_prologue(pkg, module, fn, dec, pop), body])
     pkg.add(module, render(
         template("decode.tmpl"), fn=ident(fn), summary=render("kind $k", k=lit(dec.kind)),
         port=comment(dec.port), pop=comment(pop.id), body=indent(body), dims=lit(pop.dims),
         combine=lit(dec.combine)))
     return fn
+
+
+def _gained(dec: Decoder, value: Code) -> Code:
+    """``(value) / gains`` for a decoder with gains (the reference's order), else ``value``."""
+    return value if dec.gain_axis is None else render("($v) / gains", v=value)
+
+
+def _gains_prologue(pkg: PackageBuilder, module: str, fn: str, dec: Decoder,
+                    pop: Population) -> Code:
+    """Per-neuron ``gains`` (flat, memory order) and ``activity`` as ``(frames, neurons)``.
+
+    The gains along ``dec.gain_axis`` are stored once and broadcast in the generated code,
+    as :meth:`~compiler.snn.Decoder.neuron_gains` does (the same values, so the division
+    is bit-identical to the reference's).
+    """
+    dec.neuron_gains(pop.shape)  # refuses gains that do not fit the population
+    key = pkg.store(module, fn, 1, "gains", np.asarray(dec.gains, np.float64))
+    view = tuple(len(dec.gains) if a == dec.gain_axis else 1 for a in pop.axes)
+    return render("gains = _kernels.array($key, 1, \"gains\").reshape($view)\n"
+                  "gains = np.broadcast_to(gains, $dims).ravel()\n"
+                  "activity = activity.reshape(-1, gains.size)", key=lit(key), view=lit(view),
+                  dims=lit(pop.dims))

@@ -91,6 +91,16 @@ def continuous_problems(network: SpikingNetwork) -> list[str]:
     ...     Population(id="a", shape={"i": 1}, params=NeuronParams(du=0.5))])
     >>> continuous_problems(net)[0][:40]
     "population 'a': the continuous form need"
+
+    Decoders that divide out per-index gains are left to the step engines:
+
+    >>> from compiler.snn import Decoder
+    >>> net = SpikingNetwork(name="n", n_steps=4, populations=[
+    ...     Population(id="a", shape={"i": 2}, source=True)], decoders=[
+    ...     Decoder(port="y", population="a", kind="count", gain_axis="i", gains=(1.0, 2.0))])
+    >>> print(continuous_problems(net)[0])
+    decoder 'y': per-index gains along 'i' are not supported in continuous time; \
+simulate it with backends.reference.simulate (mode 'step' or 'closed')
     """
     pops = network.population
     out = []
@@ -119,6 +129,10 @@ def continuous_problems(network: SpikingNetwork) -> list[str]:
         if dec.kind == "membrane" or dec.combine != "none":
             out.append(f"decoder {dec.port!r}: kind {dec.kind!r} / combine {dec.combine!r} is "
                        "not supported (use spiked, spike_time or count without combine)")
+        if dec.gain_axis is not None:
+            out.append(f"decoder {dec.port!r}: per-index gains along {dec.gain_axis!r} are not "
+                       "supported in continuous time; simulate it with "
+                       "backends.reference.simulate (mode 'step' or 'closed')")
     return out
 
 

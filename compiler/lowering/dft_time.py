@@ -27,44 +27,11 @@ outputs decode through a table (``spike_table``) and are used only where the
 value goes to the host.  Weights, biases and thresholds are dyadic, so the
 closed-form and step engines agree exactly.
 
-**Stage gains** (option ``stage_gains``, ``auto`` | ``none``).  One full scale
-per layer wastes the window on weak bins: with the Tx→Rx leakage at range 0
-~60 dB over the targets, a target's range bin decodes to 0.  When the next
-stage is linear along *another* axis (Doppler DFT along ``chirp`` after the
-range DFT), it acts on each index ``r`` of this layer's output axis separately,
-so index ``r`` may carry its own gain ``g_r > 0`` at no cost in exactness:
-
-.. math:: \tilde y_{r} = g_r\, y_r = (G W x)_r, \qquad
-          \tilde z_{\cdot r} = D\,\tilde y_{\cdot r} = g_r\, z_{\cdot r}
-
-(``G = diag(g)`` scales the columns ``(r, part)`` of ``M``); every later stage
-on the path repeats over ``r`` and keeps the gain, and the decoder of each
-stage divides it out (``Decoder.gain_axis``/``gains``).  With the per-index
-calibrated maxima ``m_r`` of the *first* stage (``NodeCalibration.axis_max``)
-
-.. math:: \ell_r = \min\bigl(\max(\mu\, m_r,\; \phi\,\mathrm{median}_j m_j,\;
-          \kappa\,\sigma_r),\ \max_j m_j\bigr), \qquad
-          g_r = \frac{\max_j \ell_j}{\max(\ell_r,\ \max_j \ell_j / R)}, \qquad
-          R = 2^{\,b - 1 - (\lceil\log_2 T\rceil + 2)}
-
-(``μ`` = :data:`GAIN_MARGIN`, ``φ`` = :data:`GAIN_FLOOR`, ``κ`` =
-:data:`GAIN_CODE_SIGMAS`, ``σ_r = s_in/√12·‖M_{·,r}‖₂`` the rms error the input
-code's rounding leaves on index ``r`` — calibration runs in floats and does not
-see it; the cap ``max m`` — the full scale without gains — means no index is ever
-coarser than without gains; ``b`` the weight bits:
-option ``weight_bits``, else the target's, else :func:`exact_weight_bits`; the
-weakest-gain column keeps ``log₂ T + 2`` bits, and ``R < 2`` — 8-bit weights —
-turns gains off).  Every stage ``k`` on the path gets the full scale
-``headroom · max_r g_r ℓ_{k,r}`` with its own levels, so each index of the
-first stage spans the whole window.  The first stage sets the gains because
-its rounding errors are the ones that spread: an error on a range value is
-white over the chirps and lands in every Doppler bin of that range row, while
-the last stage's errors stay in their cell (and companding refines its small
-values).  The margin ``μ`` covers frame-to-frame changes of a bin's maximum;
-the floor ``φ`` keeps bins that are quiet on the calibration set from gains so
-large that a target or scatterer appearing there later would saturate.
-``auto`` applies gains when the output goes through time-coded
-``dft``/``linear``/``window`` stages along other axes and then to the host only.
+**Stage gains** (option ``stage_gains``, ``auto`` | ``none``): a layer followed
+by time-coded linear stages along other axes may scale each index of its output
+axis by its own gain (each range bin then spans the whole window); the decoders
+divide the gains out.  The rule and its formula are in
+:mod:`compiler.lowering.stage_gains`.
 
 Examples
 --------
@@ -88,6 +55,7 @@ from compiler.lowering.charging import choose_schedule
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
 from compiler.lowering.registry import HOST, LoweringRegistry
+from compiler.lowering.stage_gains import exact_weight_bits, gained_range, stage_gains
 from compiler.lowering.values import SpikeValue, Value
 from compiler.quantize_weights import quantize, weight_bits_of
 from compiler.snn import (
@@ -104,21 +72,11 @@ from compiler.snn import (
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
 
-__all__ = ["DEFAULT_TIME_STEPS", "STAGE_GAINS", "GAIN_MARGIN", "GAIN_FLOOR",
-           "GAIN_CODE_SIGMAS", "TimeCode",
-           "LayerInput", "calibration_of", "headroom_of", "exact_weight_bits", "index_levels",
-           "stage_gains", "time_source", "time_layer", "register_time"]
+__all__ = ["DEFAULT_TIME_STEPS", "TimeCode", "LayerInput", "calibration_of", "headroom_of",
+           "time_source", "time_layer", "lower_time_linear", "register_time"]
 
 #: Charging (and encoding) window ``T`` when the ``time_steps`` option is not given.
 DEFAULT_TIME_STEPS = 256
-#: Values of the ``stage_gains`` option (the first is the default).
-STAGE_GAINS = ("auto", "none")
-#: Stage gains: level of an index over its calibrated maximum (frame-to-frame margin).
-GAIN_MARGIN = 1.25
-#: Stage gains: floor of the per-index levels, in medians of the per-index maxima.
-GAIN_FLOOR = 4.0
-#: Stage gains: floor of the per-index levels, in rms errors of the input code's rounding.
-GAIN_CODE_SIGMAS = 5.0
 _KIND = "time-linear"
 
 
@@ -300,131 +258,6 @@ def _out_split(complex_out: bool) -> Split:
     return "re_im_signed" if complex_out else "signed"
 
 
-def exact_weight_bits(t_steps: int, n_rows: int) -> int:
-    """Widest weights (≤ 32 bits) whose membrane sums stay exact in float64.
-
-    A silent-stage membrane is at most ``(2^{b−1} − 1)·T·n_rows`` in integer
-    units; it must stay below ``2^53``.
-
-    Examples
-    --------
-    >>> exact_weight_bits(256, 2048), exact_weight_bits(4096, 4096)
-    (32, 30)
-    """
-    return min(32, 54 - math.ceil(math.log2(t_steps)) - math.ceil(math.log2(max(n_rows, 2))))
-
-
-def _gain_path(ctx: LoweringContext, node: str, axis: str) -> list[str] | None:
-    """``node`` and the time-coded linear stages along other axes after it, up to the host."""
-    path = [node]
-    while True:
-        consumers = ctx.graph.consumers_of(path[-1])
-        if consumers and all(ctx.motif_for(c) == HOST for c in consumers):
-            return path if len(path) > 1 else None
-        if len(consumers) != 1:
-            return None
-        (nxt,) = consumers
-        op = ctx.graph.op(nxt)
-        motif = ctx.motif_for(nxt)
-        if ctx.registry.rule(type(op), motif, node=nxt) is not lower_time_linear or op.axis == axis:
-            return None
-        path.append(nxt)
-
-
-def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int,
-                code_noise: np.ndarray | None = None) -> tuple[np.ndarray, float] | None:
-    """The per-index gains along ``axis`` that stage ``node`` starts, or None.
-
-    See the module docstring for the rule and the formula.
-
-    Parameters
-    ----------
-    ctx : LoweringContext
-    node : str
-        A time-coded linear stage whose output axis is ``axis``.
-    axis : str
-        The axis to gain along.
-    n_rows : int
-        Rows of the stage's real matrix (for :func:`exact_weight_bits`).
-    code_noise : ndarray, optional
-        Per index, the rms error the input code's rounding leaves on the stage's
-        output (``s_in/√12 · ‖M_col‖₂``, largest part); the levels are at least
-        :data:`GAIN_CODE_SIGMAS` times it, since calibration (in floats) does not see it.
-
-    Returns
-    -------
-    (ndarray of float64, float) or None
-        The gains ``g`` (``min g = 1``) and the gained level ``g_r ℓ_r = max ℓ`` every
-        index reaches; None under ``stage_gains="none"``, when no later time-coded
-        stage repeats over ``axis``, without per-axis calibration, or when the weight
-        width leaves no room (``R < 2``).
-
-    Raises
-    ------
-    CompileError
-        For a ``stage_gains`` value other than ``auto``/``none``.
-    """
-    mode = ctx.option("stage_gains", STAGE_GAINS[0])
-    if mode not in STAGE_GAINS:
-        raise CompileError(f"node {node!r}: stage_gains={mode!r} is not a mode; use 'auto' or "
-                           "'none'", node=node)
-    path = _gain_path(ctx, node, axis) if mode == "auto" else None
-    records = [ctx.calibration.get(n) for n in path or ()]
-    if not path or any(r is None or axis not in r.axis_max for r in records):
-        return None
-    t = _steps(ctx)
-    bits = (ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
-            or exact_weight_bits(t, n_rows))
-    ratio = 2.0 ** (bits - 1 - (math.ceil(math.log2(t)) + 2))
-    if ratio < 2:
-        return None
-    maxima = np.asarray(records[0].axis_max[axis])
-    levels = index_levels(maxima)
-    if code_noise is not None:
-        levels = np.maximum(levels, GAIN_CODE_SIGMAS * np.asarray(code_noise))
-    if maxima.max() > 0:  # never coarser than one full scale for all (no gains)
-        levels = np.minimum(levels, maxima.max())
-    levels = np.maximum(levels, levels.max() / ratio)
-    return levels.max() / levels, float(levels.max())
-
-
-def index_levels(maxima: np.ndarray) -> np.ndarray:
-    r"""Per-index levels ``ℓ_r = max(μ·m_r, φ·median m)`` of calibrated maxima ``m``.
-
-    ``μ`` = :data:`GAIN_MARGIN`, ``φ`` = :data:`GAIN_FLOOR`.  With a zero median
-    every index gets ``μ·max m`` (no gains); all zero: all ones.
-
-    Examples
-    --------
-    >>> index_levels(np.array([100.0, 4.0, 3.0, 0.0])).tolist()  # median 3.5 → floor 14
-    [125.0, 14.0, 14.0, 14.0]
-    >>> index_levels(np.array([0.0, 0.0, 2.0])).tolist(), index_levels(np.zeros(2)).tolist()
-    ([2.5, 2.5, 2.5], [1.0, 1.0])
-    """
-    m = np.asarray(maxima, dtype=np.float64)
-    floor = GAIN_FLOOR * float(np.median(m)) if m.size else 0.0
-    if floor > 0:
-        return np.maximum(GAIN_MARGIN * m, floor)
-    top = GAIN_MARGIN * float(m.max()) if m.size else 0.0
-    return np.full(m.shape, top if top > 0 else 1.0)
-
-
-def _gained_range(ctx: LoweringContext, rec: NodeCalibration, axis: str | None,
-                  gains: tuple[float, ...]) -> tuple[float, tuple[float, ...]]:
-    """Full scale and charging samples of a value carrying ``gains`` along ``axis``."""
-    head = headroom_of(ctx)
-    if axis is None:
-        return rec.max_part * head, tuple(rec.part_quantiles)
-    g = np.asarray(gains)
-    if axis not in rec.axis_max:
-        return rec.max_part * float(g.max()) * head, ()
-    m = np.asarray(rec.axis_max[axis])
-    # axis_quantiles are of values / m; under gains g they scale by g·m (median index).
-    c = float(np.median(g * m))
-    full = float((g * GAIN_MARGIN * m).max()) * head  # later stages: margin, no floor
-    return full, tuple(c * q for q in rec.axis_quantiles[axis])
-
-
 def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> Value:
     """Rule of motif ``time`` for ``dft``, ``linear`` and ``window`` nodes (with stage gains)."""
     (x,) = inputs
@@ -444,13 +277,14 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
     if gain_axis is None:
         cols = np.linalg.norm(real_weights(w, code_in.split, split), axis=0)
         noise = code_in.scale / math.sqrt(12) * cols.reshape(axes.n_out, -1).max(axis=1)
-        start = stage_gains(ctx, node, axes.out_axis, n_rows, noise)
+        start = stage_gains(ctx, node, axes.out_axis, n_rows, t_steps=_steps(ctx),
+                            stage_rule=lower_time_linear, code_noise=noise)
     rec = calibration_of(ctx, node, node)
-    full, samples = _gained_range(ctx, rec, gain_axis, gains)
+    full, samples = gained_range(rec, gain_axis, gains, headroom_of(ctx))
     if start is not None:
         g, level = start
         w, gain_axis, gains, scaled = w * g[:, None], axes.out_axis, tuple(g), True
-        full, samples = _gained_range(ctx, rec, gain_axis, gains)
+        full, samples = gained_range(rec, gain_axis, gains, headroom_of(ctx))
         full = level * headroom_of(ctx)  # every index's level ℓ_r reaches the top
         ctx.builder().meta.setdefault("stage_gains", {})[node] = {
             "axis": gain_axis, "n": len(gains), "max_gain": float(g.max())}
