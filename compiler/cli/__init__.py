@@ -5,7 +5,8 @@ function, collected explicitly in :data:`COMMAND_MODULES`:
 
 * :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``, ``run``;
 * :mod:`compiler.cli.demo` — ``demo``, ``bench``;
-* :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``.
+* :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
+  (Dask is imported only when a sweep runs).
 
 Errors from the project's hierarchy (and unreadable files) are printed as one
 line ``error: …`` on stderr with exit status 2 — as a JSON object on stdout
@@ -31,7 +32,8 @@ from ir.errors import RadarSNNError
 __all__ = ["COMMAND_MODULES", "build_parser", "main"]
 
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
-COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.demo", "backends.emit.command")
+COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.demo", "backends.emit.command",
+                   "compiler.sweep.command")
 
 
 def _version() -> str:

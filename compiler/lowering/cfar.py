@@ -98,7 +98,10 @@ def _range(ctx: LoweringContext, node: str, source: str, kind: str) -> tuple[flo
             raise CompileError(f"node {node!r} (cfar): cfar_range={given!r} must be finite with "
                                "x_hi > max(x_lo, 0)", node=node)
         return lo, hi, "option"
-    quantiles = tuple(ctx.option("cfar_quantiles") or RANGE_QUANTILES[kind])
+    quantiles = ctx.option("cfar_quantiles")
+    if isinstance(quantiles, dict):  # per node id or per CFAR kind
+        quantiles = quantiles.get(node, quantiles.get(kind))
+    quantiles = tuple(quantiles or RANGE_QUANTILES[kind])
     return input_range(ctx.calibration.get(source), quantiles, node=node, source=source)
 
 

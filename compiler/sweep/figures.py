@@ -1,0 +1,186 @@
+"""Figures of a sweep's summary rows (matplotlib, Agg backend, PNG files).
+
+* ``fig7`` — the seed's Fig. 7: CFAR sensitivity and precision vs time steps,
+  one panel per variant (every grid axis other than ``x`` that varies);
+* ``sft_rmse`` — S-FT RMSE vs time steps, one line per variant (e.g. policy);
+* ``weight_bits`` — a metric vs weight bits, one line per variant;
+* ``pareto`` — a metric vs a cost column over all points, the Pareto-optimal
+  points (no other point is at least as cheap and at least as accurate, one of
+  the two strictly) joined by a line.
+
+Examples
+--------
+>>> pareto_front([3, 1, 2, 2], [0.9, 0.5, 0.7, 0.95])
+[1, 3]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from compiler.sweep.spec import FigureSpec
+from ir.errors import CompileError
+
+__all__ = ["pareto_front", "draw_figures", "MAIN_FIELD"]
+
+#: The field a metric is plotted by when a figure names only the metric key.
+MAIN_FIELD = {"cfar": "sensitivity", "detection": "pd", "sft_rmse": "rmse",
+              "classifier_accuracy": "accuracy"}
+#: Metric whose value is better when smaller (the Pareto front minimises it).
+LOWER_IS_BETTER = {"rmse", "false_alarms_per_frame"}
+
+
+def pareto_front(cost: Any, value: Any, *, maximize: bool = True) -> list[int]:
+    """Indices of the Pareto-optimal points, by increasing cost.
+
+    A point is optimal when no other has ``cost <=`` and ``value >=`` (``<=`` when
+    ``maximize`` is False) with one of them strict.  Sorting by (cost, best value
+    first) and keeping each point that beats every cheaper one is O(n log n).
+    """
+    c = np.asarray(cost, np.float64)
+    v = np.asarray(value, np.float64) * (1.0 if maximize else -1.0)
+    order = np.lexsort((-v, c))
+    best = np.maximum.accumulate(v[order])
+    keep = np.r_[True, v[order][1:] > best[:-1]]
+    return [int(i) for i in order[keep]]
+
+
+def _resolve(fig: FigureSpec, names: dict[str, str], default_name: str | None) -> tuple[str, str]:
+    """``(metric key, field)`` of a figure."""
+    if fig.metric:
+        key, _, fld = fig.metric.partition(".")
+    else:
+        keys = [k for k, n in names.items() if default_name in (None, n)]
+        if not keys:
+            raise CompileError(f"figure {fig.kind!r}: the sweep has no {default_name or 'any'} "
+                               f"metric (metrics {sorted(names)}); add one or set `metric`")
+        key, fld = keys[0], ""
+    if key not in names:
+        raise CompileError(f"figure {fig.kind!r}: metric {key!r} is not in the sweep's metrics "
+                           f"{sorted(names)}")
+    return key, fld or MAIN_FIELD.get(names[key], "")
+
+
+def _variants(rows: list[dict], x: str) -> dict[str, list[dict]]:
+    varying = [k for k in rows[0]["params"]
+               if k != x and len({repr(r["params"].get(k)) for r in rows}) > 1]
+    groups: dict[str, list[dict]] = {}
+    for r in rows:
+        label = ", ".join(f"{k}={r['params'].get(k)}" for k in varying or ["chain"])
+        groups.setdefault(label, []).append(r)
+    return groups
+
+
+def _series(rows: list[dict], x: str, key: str, fld: str) -> tuple[list, list]:
+    pts = sorted((r["params"][x], r["metrics"][key][fld]) for r in rows
+                 if x in r["params"] and key in r["metrics"] and r["params"][x] is not None)
+    return [p[0] for p in pts], [p[1] for p in pts]
+
+
+def _log_x(ax, rows: list[dict], x: str) -> None:
+    """A log x axis labelled at the grid's own values (10, 20, 50, …)."""
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    ax.set_xscale("log")
+    ax.set_xticks(sorted({r["params"][x] for r in rows if r["params"].get(x) is not None}))
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.tick_params(axis="x", labelsize="small", labelrotation=45)
+
+
+def _fig7(plt, rows, fig, names):
+    key, _ = _resolve(fig, names, "cfar")
+    x = fig.x or "time_steps"
+    groups = _variants(rows, x)
+    f, axes = plt.subplots(1, len(groups), figsize=(4.2 * len(groups), 3.4), squeeze=False)
+    for ax, (label, group) in zip(axes[0], groups.items(), strict=True):
+        for fld, style in (("sensitivity", "o-"), ("precision", "s--")):
+            xs, ys = _series(group, x, key, fld)
+            ax.plot(xs, 100 * np.asarray(ys), style, label=fld)
+        ax.set(xlabel=x.replace("_", " "), ylabel="%", title=label)
+        _log_x(ax, group, x)
+        ax.grid(alpha=0.3)
+        ax.legend()
+    return f
+
+
+def _lines(plt, rows, fig, names, default_name, x_default):
+    key, fld = _resolve(fig, names, default_name)
+    x = fig.x or x_default
+    f, ax = plt.subplots(figsize=(5.5, 3.8))
+    for label, group in _variants(rows, x).items():
+        xs, ys = _series(group, x, key, fld)
+        ax.plot(xs, ys, "o-", label=label)
+    ax.set(xlabel=x.replace("_", " "), ylabel=f"{key}.{fld}")
+    if x == "time_steps":
+        _log_x(ax, rows, x)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    return f
+
+
+def _pareto(plt, rows, fig, names):
+    key, fld = _resolve(fig, names, None)
+    cost = fig.cost or "synapses"
+    ok = [r for r in rows if key in r["metrics"] and r["cost"].get(cost) is not None]
+    c = [r["cost"][cost] for r in ok]
+    v = [r["metrics"][key][fld] for r in ok]
+    front = pareto_front(c, v, maximize=fld not in LOWER_IS_BETTER)
+    f, ax = plt.subplots(figsize=(5.5, 3.8))
+    ax.scatter(c, v, color="0.6", label="points")
+    ax.plot([c[i] for i in front], [v[i] for i in front], "o-", color="C3", label="Pareto front")
+    ax.set(xlabel=f"cost.{cost}", ylabel=f"{key}.{fld}")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return f
+
+
+def draw_figures(figures: list[FigureSpec], rows: list[dict], out_dir: str | Path,
+                 names: dict[str, str] | None = None) -> list[Path]:
+    """Draw each figure of ``figures`` from the summary ``rows``; return the PNG paths.
+
+    Parameters
+    ----------
+    figures : list of FigureSpec
+        The spec's ``figures``.
+    rows : list of dict
+        :func:`compiler.sweep.results.summarize` rows (incomplete or failed rows skipped).
+    out_dir : str or Path
+        Folder of the PNG files (created), one ``<name or kind>.png`` per figure.
+    names : dict, optional
+        Metric key -> registered metric name (default: each key is its name).
+
+    Raises
+    ------
+    CompileError
+        A figure names a metric the sweep does not have.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in rows if r["complete"] and not r["error"] and r["metrics"]]
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if not rows:
+        return []
+    names = names or {k: k for k in rows[0]["metrics"]}
+    drawers = {
+        "fig7": lambda fig: _fig7(plt, rows, fig, names),
+        "sft_rmse": lambda fig: _lines(plt, rows, fig, names, "sft_rmse", "time_steps"),
+        "weight_bits": lambda fig: _lines(plt, rows, fig, names, None, "weight_bits"),
+        "pareto": lambda fig: _pareto(plt, rows, fig, names),
+    }
+    paths = []
+    for fig in figures:
+        f = drawers[fig.kind](fig)
+        f.tight_layout()
+        path = out / f"{fig.name or fig.kind}.png"
+        f.savefig(path, dpi=110)
+        plt.close(f)
+        paths.append(path)
+    return paths

@@ -1,0 +1,103 @@
+"""Sweep files: validation errors that name the field, grid expansion, cell ids."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+from hypothesis import given
+from hypothesis import strategies as st
+
+from compiler.sweep.spec import SweepSpec, cell_key, load_spec, parse_spec
+from ir.errors import CompileError
+
+CHAIN = {"name": "c", "nodes": [
+    {"id": "x", "op": "input", "shape": {"range": 16, "doppler": 8}},
+    {"id": "o", "op": "output", "input": "x"}]}
+
+
+def _spec(**over):
+    base = {"name": "t", "chains": {"a": CHAIN}, "grid": {"time_steps": [8, 16]},
+            "frames": {"source": "scene", "n_frames": 5, "frames_per_cell": 2}}
+    return {**base, **over}
+
+
+@pytest.mark.parametrize(("over", "match"), [
+    ({"grid": {"time_step": [8]}}, r"grid axis 'time_step' is not a compile option"),
+    ({"grid": {"time_steps": []}}, r"grid axis 'time_steps' has no values"),
+    ({"grid": {"time_steps": [8, 8]}}, r"grid axis 'time_steps' repeats a value"),
+    ({"grid": {"chain": ["a", "zz"]}}, r"names \['zz'\], not in chains \['a'\]"),
+    ({"chains": {"a": CHAIN, "b": CHAIN}}, r"2 chains \['a', 'b'\] but no grid axis 'chain'"),
+    ({"options": {"charge": "constant"}}, r"options \['charge'\] are not compile options"),
+    ({"metrics": [{"name": "cfar"}, {"name": "cfar"}]}, r"metric labels .* repeat"),
+    ({"frames": {"source": "tape"}}, r"field 'frames'"),
+    ({"frames": {"source": "scene", "n_frames": 0}}, r"field 'frames.scene.n_frames'.*given 0"),
+    ({"mode": "fast"}, r"field 'mode'"),
+    ({"figures": ["fig8"]}, r"field 'figures.0.kind'"),
+    ({"surprise": 1}, r"field 'surprise': Extra inputs are not permitted"),
+])
+def test_invalid_specs_name_the_field(over, match):
+    with pytest.raises(CompileError, match=match):
+        parse_spec(_spec(**over))
+
+
+def test_missing_field_and_file_errors(tmp_path):
+    with pytest.raises(CompileError, match=r"field 'chains': Field required"):
+        parse_spec({"name": "x", "frames": {"source": "scene"}})
+    with pytest.raises(CompileError, match=r"cannot be read"):
+        load_spec(tmp_path / "none.yaml")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: [unclosed\n")
+    with pytest.raises(CompileError, match=r"not valid YAML"):
+        load_spec(bad)
+    bad.write_text("- 1\n- 2\n")
+    with pytest.raises(CompileError, match=r"expected a mapping of sweep fields, got list"):
+        load_spec(bad)
+    code = tmp_path / "code.yaml"  # safe_load: a python tag is an error, never a call
+    code.write_text("name: !!python/object/apply:os.system ['echo hi']\n")
+    with pytest.raises(CompileError, match=r"not valid YAML"):
+        load_spec(code)
+
+
+def test_points_are_the_product_in_written_order():
+    spec = SweepSpec.model_validate(_spec(
+        chains={"a": CHAIN, "b": CHAIN}, options={"cfar_ties": "exact"}, target="loihi2",
+        grid={"chain": ["b", "a"], "weight_bits": [None, 4], "charging": ["constant"]}))
+    pts = spec.points()
+    assert [(p.chain, p.params["weight_bits"]) for p in pts] == [
+        ("b", None), ("b", 4), ("a", None), ("a", 4)]
+    assert pts[1].compile_args == {
+        "target": "loihi2", "motifs": None, "calibration": "static", "time_steps": None,
+        "weight_bits": 4, "options": {"cfar_ties": "exact", "charging": "constant"}}
+    assert pts[0].mode == "step"
+
+
+def test_grid_overrides_fixed_fields():
+    spec = SweepSpec.model_validate(_spec(grid={"mode": ["closed"], "target": [None]},
+                                          target="loihi"))
+    (p,) = spec.points()
+    assert p.mode == "closed" and p.compile_args["target"] is None
+
+
+def test_chain_files_are_read_relative_to_the_spec(tmp_path):
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(CHAIN))
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(_spec(chains={"a": "c.yaml"})))
+    spec = load_spec(tmp_path / "s.yaml")
+    assert spec.chain_dict("a")["name"] == "c"
+
+
+def test_cell_key_is_canonical_and_sensitive():
+    a = cell_key({"x": 1, "y": [1, 2]}, (0, 5))
+    assert a == cell_key({"y": [1, 2], "x": 1}, [0, 5])
+    assert a != cell_key({"x": 1, "y": [1, 2]}, (0, 6))
+    assert a != cell_key({"x": 1.5, "y": [1, 2]}, (0, 5))
+    assert len(a) == 16 and int(a, 16) >= 0
+
+
+@given(n=st.integers(1, 500), step=st.integers(1, 64))
+def test_slices_partition_the_frames(n, step):
+    spec = SweepSpec.model_validate(_spec(frames={"source": "scene", "n_frames": n,
+                                                  "frames_per_cell": step}))
+    sl = spec.slices()
+    assert sl[0][0] == 0 and sl[-1][1] == n
+    assert all(b - a == step for a, b in sl[:-1]) and 0 < sl[-1][1] - sl[-1][0] <= step
+    assert all(sl[i][1] == sl[i + 1][0] for i in range(len(sl) - 1))
