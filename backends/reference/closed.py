@@ -189,11 +189,13 @@ def _solve(
     u, v, first = np.zeros(n, dtype), np.zeros(n, dtype), np.full(n, -1, np.int64)
     simple = params.dv == 0.0 and params.du in (0.0, 1.0)
     block = max(1, block_bytes // (3 * 8 * n))
-    for seg in params.segments:
+    for i, seg in enumerate(params.segments):
         if not seg.input_on and params.dv == 0.0:
             u, v = _charge(v, first, seg, params)
         elif seg.input_on and not seg.spiking_on and simple:
-            u, v = _silent(u, v, seg, params, arrivals, n_frames, pop.dims)
+            # the end current u matters only if a later segment takes input (else it is reset)
+            need_u = any(s.input_on for s in params.segments[i + 1:])
+            u, v = _silent(u, v, seg, params, arrivals, n_frames, pop.dims, need_u=need_u)
         else:
             for s0 in range(seg.start, seg.stop, block):
                 part = seg._replace(start=s0, stop=min(s0 + block, seg.stop))
@@ -209,24 +211,30 @@ def _charge(
     """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic."""
     n, b = seg.stop - seg.start, seg.bias
     if seg.spiking_on:
+        idle = np.flatnonzero(first < 0)  # only neurons that have not fired can fire now
+        w = v[idle]
         if b > 0:
-            gap = params.v_th - v
+            gap = params.v_th - w
             k = -((-gap) // b) if params.integer else np.ceil(gap / b)
             k = np.clip(k, 1, n + 1).astype(np.int64)
-            k = np.where((k > 1) & (v + (k - 1) * b >= params.v_th), k - 1, k)
-            k = np.where(v + k * b < params.v_th, k + 1, k)
+            k = np.where((k > 1) & (w + (k - 1) * b >= params.v_th), k - 1, k)
+            k = np.where(w + k * b < params.v_th, k + 1, k)
         else:
-            k = np.where(v + b >= params.v_th, 1, n + 1)
-        hit = (k <= n) & (first < 0)
-        first[hit] = seg.start + k[hit] - 1
+            k = np.where(w + b >= params.v_th, 1, n + 1)
+        hit = k <= n
+        first[idle[hit]] = seg.start + k[hit] - 1
     return np.zeros_like(v), v + n * b
 
 
 def _silent(
     u: np.ndarray, v: np.ndarray, seg: Segment, params: StepParams, arrivals: list,
-    n_frames: int, dims: tuple[int, ...]
+    n_frames: int, dims: tuple[int, ...], need_u: bool = True
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Input on, spiking off, ``dv = 0``, ``du ∈ {0, 1}``: end state from arrival features."""
+    """Input on, spiking off, ``dv = 0``, ``du ∈ {0, 1}``: end state from arrival features.
+
+    With ``du = 0`` and ``need_u`` False the end current (``u + Σ w``) is not
+    computed: no later segment reads it (the caller checked), saving one product.
+    """
     s0, s1, b = seg.start, seg.stop, seg.bias
     total = np.zeros((n_frames, *dims), u.dtype)
     second = np.zeros_like(total)
@@ -236,7 +244,8 @@ def _silent(
             continue
         # unit weights route the silent stage's bulk delivery through the BLAS path (event
         # order is immaterial here: the silent path is exact only where every sum is exact)
-        total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
+        if need_u or params.du != 0.0:
+            total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
         if params.du == 0.0:
             second += arr.delivery.current(arr.k, flat, n_frames, values=s1 - arrive)
         else:

@@ -189,8 +189,11 @@ class StencilDelivery:
         flat_edge, valid = self._edge_targets(k, events[~inner], n_batch)
         flat = np.concatenate([flat_in.ravel(), flat_edge[valid]])
         weights = np.concatenate([w_ev[inner].ravel(), w_ev[~inner][valid]])
-        out = np.zeros(n_batch * n_tgt, np.int64 if self.integer else np.float64)
-        np.add.at(out, flat, weights)
+        if self.integer:
+            out = np.zeros(n_batch * n_tgt, np.int64)
+            np.add.at(out, flat, weights)
+        else:  # bincount adds in array order, like add.at, and is several times faster
+            out = np.bincount(flat, weights=weights, minlength=n_batch * n_tgt)
         return out.reshape(n_batch, *self.tgt_dims)
 
     def n_events(self, k: int, events: np.ndarray) -> int:
