@@ -188,6 +188,8 @@ def main(argv: list[str] | None = None) -> None:
     chirps = 8 if args.quick else args.chirps
     repeats = max(args.repeats, 3)
 
+    from threadpoolctl import threadpool_limits
+
     from backends.reference import build_plan, simulate
 
     x = chirp_matrix(chirps)
@@ -196,10 +198,15 @@ def main(argv: list[str] | None = None) -> None:
           f"{net.n_synapses} stored synapses ({net.n_synapse_instances()} instances), "
           f"{net.n_steps} steps, v_th={net.meta['v_th']:g}, bias={net.meta['bias']:g}")
     ours = {}
-    for mode in ("step", "closed"):
-        seconds, result = median_time(lambda m=mode: simulate(net, {"x": x}, mode=m), repeats)
-        ours[mode] = (seconds, result)
-        print(f"ours {mode:6s}: {seconds * 1e3:9.1f} ms (median of {repeats})")
+    # one BLAS thread, like Brian2's numpy and cython targets: on 2 cores a multi-threaded
+    # OpenBLAS spends ~8 ms waking its threads for each of these small products
+    with threadpool_limits(limits=1):
+        for mode in ("step", "closed"):
+            seconds, result = median_time(lambda m=mode: simulate(net, {"x": x}, mode=m),
+                                          repeats)
+            ours[mode] = (seconds, result)
+            print(f"ours {mode:6s}: {seconds * 1e3:9.1f} ms (median of {repeats}, one BLAS "
+                  "thread, plan built in each run)")
     first = ours["step"][1].first_spike_steps["sft"].reshape(-1)
     same_modes = np.array_equal(first, ours["closed"][1].first_spike_steps["sft"].reshape(-1))
     print(f"step vs closed spike steps identical: {same_modes}")

@@ -21,7 +21,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
-from backends.reference.signed_factor import SignedFactor, signed_factor
+from backends.reference.signed_factor import SignedFactor, distinct_up_to_sign, signed_factor
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
 
@@ -37,6 +37,9 @@ _FACTOR_MIN_ENTRIES = 4096
 def _worth_factoring(w, integer: bool) -> SignedFactor | None:
     """The sign-symmetric factor of a large dense float ``w`` if it halves the work, else None."""
     if integer or sp.issparse(w) or w.size < _FACTOR_MIN_ENTRIES:
+        return None
+    rows, cols = distinct_up_to_sign(w)  # two mat-vecs: skip the sort when it cannot pay
+    if rows * cols > 0.5 * w.size:
         return None
     factor = signed_factor(w)
     return factor if factor.saving <= 0.5 else None

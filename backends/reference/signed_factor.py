@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SignedFactor", "signed_factor"]
+__all__ = ["SignedFactor", "distinct_up_to_sign", "signed_factor"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,6 +60,25 @@ def _fold_rows(w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     canon = w * np.where(sign != 0, sign, 1.0)[:, None]
     core, inverse = np.unique(canon, axis=0, return_inverse=True)
     return core, inverse.reshape(-1).astype(np.int64), sign.astype(np.float64)
+
+
+def distinct_up_to_sign(w: np.ndarray) -> tuple[int, int]:
+    """Upper bounds on the distinct rows and columns of ``w`` up to sign, in two mat-vecs.
+
+    Rows equal up to sign have equal ``|w·r|`` for any vector ``r``; the count of
+    distinct ``|w·r|`` (``r`` fixed pseudo-random) can only over-count, so it is a
+    cheap test of whether :func:`signed_factor` is worth its sort.
+
+    Examples
+    --------
+    >>> distinct_up_to_sign(np.array([[1.0, -1.0], [-1.0, 1.0], [2.0, -2.0]]))
+    (2, 1)
+    """
+    w = np.asarray(w, dtype=np.float64)
+    rng = np.random.default_rng(12345)
+    rows = np.unique(np.abs(w @ rng.standard_normal(w.shape[1]))).size
+    cols = np.unique(np.abs(rng.standard_normal(w.shape[0]) @ w)).size
+    return rows, cols
 
 
 def signed_factor(w: np.ndarray) -> SignedFactor:
