@@ -296,3 +296,25 @@ def test_missing_range_is_a_compile_error_naming_the_node():
     with pytest.raises(CompileError, match="node 'det' \\(cfar\\): no calibration") as err:
         _lower(g)
     assert err.value.node == "det"
+
+
+def test_spiking_magnitude_feeding_a_spiking_cfar_compiles_and_runs():
+    # regression: the CFAR rule opened its builder before encoding its (spiking) input, and the
+    # encode closed that network ("projection 'det/train': unknown population 'det/in'")
+    from backends.reference import run_program
+    from compiler.compile import compile_graph
+    from ir import Graph
+
+    g = Graph.from_dict({"name": "m", "nodes": [
+        {"id": "x", "op": "input", "shape": {"chirp": 8, "sample": 16}, "complex": True},
+        {"id": "r", "op": "dft", "input": "x", "axis": "sample", "out_axis": "range"},
+        {"id": "mag", "op": "magnitude", "input": "r", "kind": "l1"},
+        {"id": "det", "op": "cfar", "input": "mag", "kind": "os", "axes": ["range"],
+         "guard": 1, "train": 3, "k": 4, "alpha": 3.0, "edge": "wrap"},
+        {"id": "o", "op": "output", "input": "det"}]})
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal((8, 16)) + 1j * rng.standard_normal((8, 16))
+    for motif in ("l1", "amb"):
+        program = compile_graph(g, None, calibration_inputs={"x": x}, motifs={"mag": motif})
+        assert [s.kind for s in program.segments][:1] == ["spiking"]
+        assert run_program(program, {"x": x}).outputs["o"].shape == (8, 16)

@@ -121,3 +121,15 @@ def test_json_errors_are_json(capsys, tmp_path):
 def test_debug_shows_the_traceback(tmp_path):
     with pytest.raises(Exception, match="nope"):
         main(["--debug", "validate", str(tmp_path / "nope.yaml")])
+
+
+def test_program_artifacts_keep_the_axis_order(tmp_path):
+    # regression: the sorted manifest reordered {rx, chirp, sample} to {chirp, rx, sample}
+    g = Graph.from_dict({"name": "order", "nodes": [
+        {"id": "adc", "op": "input", "shape": {"rx": 2, "chirp": 4, "sample": 8}},
+        {"id": "m", "op": "magnitude", "input": "adc", "kind": "square"},
+        {"id": "o", "op": "output", "input": "m"}]})
+    back = load(save(compile_graph(g), tmp_path / "p"))
+    assert list(back.graph.infer_types()["adc"].axes) == ["rx", "chirp", "sample"]
+    x = np.arange(64.0).reshape(2, 4, 8)
+    np.testing.assert_array_equal(run_program(back, {"adc": x}).outputs["o"], x ** 2)

@@ -153,8 +153,10 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
             Phase(start_step=code.t_max, input_on=False)))
         cut_w = n_avail.astype(np.float64)
         train_w = -alpha
-    builder = ctx.builder()
+    # encode first: decoding a spiking input to the host closes the open network, and the
+    # builder must be the one the encoder's population lives in
     src = ctx.encode(value, consumer=node, code=code, motif=MOTIF)
+    builder = ctx.builder()
     det = builder.population(node, "det", dict(t_in.axes), params, motif=MOTIF)
     kernel = train_w * training_mask(list(win.guard), list(win.train)).astype(np.float64)
     builder.stencil(node, "train", src.id, det.id, axes=win.axes, kernel=kernel, edge=win.edge,
