@@ -24,6 +24,7 @@ import time
 
 import numpy as np
 
+from compiler.sweep.frames import random_scene  # the sweep's scene model, shared
 from ir import Graph
 
 __all__ = ["ALPHA", "K_OS", "rd_maps", "random_scene", "study_graph", "score", "main"]
@@ -33,27 +34,6 @@ ALPHA = {"os": {"db": 1.2, "power": 10.0}, "ca": {"db": 1.2, "power": 20.0}}
 #: OS rank: the 132nd largest of 176 training cells.
 K_OS = 132
 SHAPE = {"range": 256, "doppler": 64}
-#: Target classes: (RCS dBsm, speed limit m/s).
-CLASSES = {"pedestrian": (-5.0, 2.0), "cyclist": (0.0, 6.0), "car": (10.0, 14.0)}
-
-
-def random_scene(rng: np.random.Generator):
-    """A carrada-preset scene with 1-3 random targets, leakage, clutter and noise."""
-    from radar.scene import Clutter, Leakage, Scene, Target
-
-    targets = []
-    for _ in range(int(rng.integers(1, 4))):
-        name = str(rng.choice(list(CLASSES)))
-        rcs, vmax = CLASSES[name]
-        targets.append(Target(range_m=float(rng.uniform(3.0, 45.0)),
-                              velocity_mps=float(rng.uniform(-vmax, vmax)),
-                              azimuth_deg=float(rng.uniform(-40.0, 40.0)),
-                              rcs_dbsm=float(rcs + rng.normal(0.0, 3.0)), name=name))
-    return Scene(name="random", targets=tuple(targets),
-                 leakage=(Leakage(range_m=0.05, amplitude_dbfs=-30.0, name="tx_rx_leakage"),),
-                 clutter=Clutter(n_scatterers=24, amplitude_dbfs=-75.0, min_range_m=3.0,
-                                 max_range_m=48.0),
-                 noise_dbfs=-80.0, gain_dbfs=-20.0)
 
 
 def rd_maps(n: int, *, seed: int) -> np.ndarray:

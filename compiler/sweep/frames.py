@@ -74,8 +74,7 @@ def random_scene(rng: np.random.Generator):
     """A CARRADA-like scene: 1-3 random targets, Tx->Rx leakage, static clutter, noise.
 
     Targets are drawn from :data:`TARGET_CLASSES` (RCS ± 3 dB Gaussian, speed uniform
-    within the class limit), at 3-45 m and ±40°; the same scene model as
-    ``benchmarks/cfar.py``.
+    within the class limit), at 3-45 m and ±40°; ``benchmarks/cfar.py`` uses it too.
 
     Examples
     --------
