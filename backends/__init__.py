@@ -24,6 +24,7 @@ from typing import Any
 from backends import artifact
 from backends.artifact import ARTIFACT_VERSION
 from backends.program_artifact import PROGRAM_VERSION, is_program, load_program, save_program
+from ir.errors import ArtifactError
 
 __all__ = ["ARTIFACT_VERSION", "PROGRAM_VERSION", "is_program", "load", "load_program", "save",
            "save_program"]
@@ -36,9 +37,16 @@ def save(obj: Any, directory: str | Path, **kwargs: Any) -> Path:
     :func:`backends.artifact.save`.
     """
     from compiler.program import CompiledProgram
+    from compiler.snn import SpikingNetwork
 
     if isinstance(obj, CompiledProgram):
         return save_program(obj, directory, **kwargs)
+    if not isinstance(obj, SpikingNetwork):
+        raise ArtifactError(f"cannot save a {type(obj).__name__} to {directory}: save() takes a "
+                            "CompiledProgram or a SpikingNetwork (chains: Graph.to_yaml)")
+    if is_program(directory):  # load() would find the program, not this network
+        raise ArtifactError(f"{directory} holds a program artifact (program.json); save the "
+                            "network into another directory")
     return artifact.save(obj, directory, **kwargs)
 
 

@@ -195,7 +195,7 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
         folder.mkdir(parents=True, exist_ok=True)
         write_atomic(folder / ARRAYS_FILE, npz)
         write_atomic(folder / MANIFEST_FILE, render_json(manifest))
-    except OSError as exc:
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot write the artifact to {folder}: {exc}") from exc
     return folder
 

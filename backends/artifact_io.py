@@ -293,6 +293,7 @@ def read_bytes(path: Path) -> bytes:
     """
     try:
         return path.read_bytes()
-    except OSError as exc:
-        raise ArtifactError(f"{path}: cannot read ({exc.strerror or exc}); is this an artifact "
-                            "directory written by backends.artifact.save?") from exc
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
+        raise ArtifactError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc}); is "
+                            "this an artifact directory written by backends.artifact.save?"
+                            ) from exc

@@ -2,7 +2,8 @@ r"""A whole :class:`~compiler.program.CompiledProgram` on disk: its graph, segme
 
 A program artifact is a directory::
 
-    program.json          graph, segments, options, target profile, report (strict JSON)
+    program.json          graph and report (as JSON text: their key order matters), segments,
+                          options, target profile (strict JSON)
     report.md             the resource report for people (not read back)
     networks/0/ …         one spiking-network artifact per spiking segment (backends.artifact)
 
@@ -63,7 +64,10 @@ def is_program(directory: str | Path) -> bool:
     >>> is_program("/nonexistent")
     False
     """
-    return (Path(directory) / PROGRAM_FILE).is_file()
+    try:
+        return (Path(directory) / PROGRAM_FILE).is_file()
+    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
+        return False
 
 
 def _segment_entry(seg: Segment, digests: list[str]) -> dict:
@@ -104,7 +108,7 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
     folder = Path(directory)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot create the program artifact folder {folder}: {exc}") from exc
     digests: list[str] = []
     segments = []
@@ -114,18 +118,18 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
             digests.append(read_manifest(net_dir)[_HASH_KEY])
         segments.append(_segment_entry(seg, digests))
     report = program.records.get("report")
-    report_data = None if report is None else json.loads(report.to_json())
     target = program.target
     body = {
         "format": PROGRAM_FORMAT,
         "format_version": PROGRAM_VERSION,
         "radarsnn_version": _radarsnn_version(),
-        "graph": plain_json(program.graph.to_dict(), "graph"),
+        # as JSON text: the manifest's keys are sorted, and a tensor's axes are ordered
+        "graph": json.dumps(plain_json(program.graph.to_dict(), "graph"), ensure_ascii=True),
         "segments": segments,
         "options": plain_json(_jsonable(program.options), "compile options"),
         "target": None if target is None else plain_json(target.model_dump(mode="json"),
                                                           "target profile"),
-        "report": plain_json(report_data, "report"),
+        "report": None if report is None else report.to_json(indent=None),
         "extra": plain_json(dict(extra or {}), "extra"),
     }
     manifest = {**body, _HASH_KEY: sha256_hex(canonical_json(body))}
@@ -133,7 +137,7 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
         _write(folder / PROGRAM_FILE, render_json(manifest))
         if report is not None:
             _write(folder / "report.md", report.to_markdown().encode("utf-8"))
-    except OSError as exc:
+    except (OSError, ValueError) as exc:
         raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
     return folder
 
@@ -186,6 +190,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
         a network whose digest differs from the one recorded, or a graph or
         profile that does not parse (the message names the file).
     """
+    from backends.reference.program import check_program
     from compiler.hardware import HardwareProfile
     from compiler.report import Report
 
@@ -193,7 +198,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
     manifest = read_program_manifest(folder)
     path = folder / PROGRAM_FILE
     try:
-        graph = Graph.from_dict(manifest["graph"])
+        graph = Graph.from_dict(json.loads(manifest["graph"]))
         graph.verify()
         segments = []
         for entry in manifest["segments"]:
@@ -214,13 +219,17 @@ def load_program(directory: str | Path) -> CompiledProgram:
             else:
                 raise ArtifactError(f"{path}: unknown segment kind {entry['kind']!r}")
         target = manifest["target"]
-        profile = None if target is None else HardwareProfile(**target)
+        profile = None if target is None else HardwareProfile.model_validate(target)
+        report = manifest["report"]
+        records = {} if report is None else {"report": Report(json.loads(report))}
+        program = CompiledProgram(graph=graph, segments=segments,
+                                  options=dict(manifest["options"]), records=records,
+                                  target=profile)
+        check_program(program)
     except ArtifactError:
         raise
     except RadarSNNError as exc:
         raise ArtifactError(f"{path}: the stored program is invalid: {exc}", node=exc.node) from exc
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ArtifactError(f"{path}: malformed entry ({type(exc).__name__}: {exc})") from exc
-    records = {} if manifest["report"] is None else {"report": Report(manifest["report"])}
-    return CompiledProgram(graph=graph, segments=segments, options=dict(manifest["options"]),
-                           records=records, target=profile)
+    return program

@@ -29,8 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from compiler.guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
+from compiler.option_checks import check_options
 from compiler.passes import CompileContext, Pass, Verify, run_pipeline
 from compiler.passes.base import Progress
 from compiler.passes.calibrate import Calibrate
@@ -56,13 +58,16 @@ EXTRA_OPTIONS = {
     "fft_radices": "radix sequence of the time-fft motif",
     "input_range": "assumed max |input| of rate/fft motifs without calibration",
     "cfar_range": "{cfar node id: (lo, hi)} value range of the CFAR latency code",
-    "cfar_quantiles": "quantiles of the calibration map that bound the CFAR code",
+    "cfar_quantiles": "(lo, hi) quantiles of the calibration map that bound the CFAR code, or "
+                      "{node id or kind: (lo, hi)}",
     "cfar_ties": "how the CFAR code resolves equal spike steps",
     "long_delays": "quantize: 'relay' (default) or 'error' for delays beyond the target's maximum",
     "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
     "frame_rate_hz": "report: frames per second (default from the chain or 10)",
     "real_bits": "report: bits per real sample of frame I/O (default 16)",
     "n_angle_bins": "report: angle bins of the RA map (default 256)",
+    "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
+    "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
 }
 
 
@@ -118,15 +123,25 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
     IRError
         The graph does not verify (naming the node).
     CompileError
-        An option or motif cannot be honoured (naming the node and the fix).
+        An option or motif cannot be honoured (naming the node and the fix), or an
+        option's value breaks its rule (:mod:`compiler.option_checks`).
     BudgetError
-        The program does not fit the target (naming the node, budget and amount).
+        The program does not fit the target (naming the node, budget and amount), or
+        its estimated compile memory or time exceeds the options ``max_memory_bytes``
+        / ``max_time_s`` (:mod:`compiler.guards`; checked before anything is built).
     """
     if isinstance(graph, (str, Path)):
         graph = Graph.from_yaml(Path(graph))
     unknown = sorted(set(options or {}) - set(EXTRA_OPTIONS))
     if unknown:
         raise CompileError(f"unknown compile options {unknown}; known: {sorted(EXTRA_OPTIONS)}")
+    options = check_options(options, time_steps=time_steps, weight_bits=weight_bits,
+                            calibration=calibration, motifs=motifs)
+    max_memory_bytes, max_time_s = limits_from_options(options)
+    if not isinstance(graph, Graph):
+        raise CompileError(f"compile_graph takes a Graph or a chain file path; got "
+                           f"{type(graph).__name__}")
+    check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
     profile = None if target is None else load_profile(target)
     options = {**dict(options or {}), "motifs": dict(motifs or {}), "calibration": calibration,
                "time_steps": time_steps, "weight_bits": weight_bits}

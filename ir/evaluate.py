@@ -308,8 +308,11 @@ def check_input(node_id: str, t: TensorType, value: object) -> np.ndarray:
     ir.errors.IRError: input 'adc': array shape (3, 2) does not match the declared axes \
 {'chirp': 2, 'sample': 3}, shape (2, 3)
     """
-    arr = np.asarray(value)
     where = f"input {node_id!r}"
+    try:
+        arr = np.asarray(value)
+    except (ValueError, TypeError) as err:  # ragged nested lists, objects numpy cannot hold
+        raise IRError(f"{where}: not an array ({err})", node=node_id) from None
     if arr.shape != t.shape:
         raise IRError(
             f"{where}: array shape {arr.shape} does not match the declared axes "

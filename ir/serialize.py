@@ -57,6 +57,7 @@ from ir.model import describe_validation_error, is_name
 from ir.ops import OP_REGISTRY, OpRegistry
 
 __all__ = [
+    "describe_yaml_error",
     "graph_from_dict",
     "graph_from_json",
     "graph_from_yaml",
@@ -184,7 +185,7 @@ def _read_envelope(
         )
     where = f"chain {name!r}, node {id!r}"
     op_name = entry.get("op")
-    if op_name not in registry:
+    if not isinstance(op_name, str) or op_name not in registry:  # a list/dict is unhashable
         raise ChainFileError(
             f"{where}: " + ("missing 'op'" if op_name is None else f"unknown op {op_name!r}")
             + f"; valid ops: {', '.join(sorted(registry))}",
@@ -234,9 +235,29 @@ def graph_from_yaml(source: str | Path, *, registry: OpRegistry | None = None) -
         data = yaml.safe_load(text)
         return graph_from_dict(_as_mapping(data, source), registry=registry)
     except yaml.YAMLError as err:
-        raise ChainFileError(f"{label}invalid YAML: {err}") from err
+        raise ChainFileError(f"{label}invalid YAML: {describe_yaml_error(err)}") from err
     except ChainFileError as err:
         raise ChainFileError(f"{label}{err}", node=err.node) from err
+
+
+def describe_yaml_error(err: yaml.YAMLError) -> str:
+    """A PyYAML error on one line: ``line L, column C: <problem> (<context>)``.
+
+    Examples
+    --------
+    >>> try:
+    ...     yaml.safe_load("a: [1,\\nb: 2}")
+    ... except yaml.YAMLError as err:
+    ...     print(describe_yaml_error(err))
+    line 2, column 5: expected ',' or ']', but got '}' (while parsing a flow sequence)
+    """
+    mark = getattr(err, "problem_mark", None)
+    problem = getattr(err, "problem", None)
+    if mark is None or problem is None:
+        return " ".join(str(err).split())
+    context = getattr(err, "context", None)
+    where = f"line {mark.line + 1}, column {mark.column + 1}"
+    return f"{where}: {problem}" + (f" ({context})" if context else "")
 
 
 def _reject_duplicate_yaml_keys(text: str) -> None:
@@ -317,7 +338,7 @@ def _read_source(source: str | Path) -> tuple[str, str]:
     if isinstance(source, os.PathLike):
         try:
             return Path(source).read_text(encoding="utf-8"), f"{source}: "
-        except (OSError, UnicodeDecodeError) as err:
+        except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
             raise ChainFileError(f"{source}: cannot read the chain file: {err}") from err
     if isinstance(source, str):
         return source, ""

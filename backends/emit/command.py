@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from backends.emit import EMITTERS
+from compiler.cli.chain import read_npy
 from ir.errors import CompileError, RadarSNNError
 
 __all__ = ["add_parsers", "run_emit"]
@@ -29,10 +30,7 @@ def _load(items: list[str], ports: list[str], what: str) -> dict[str, np.ndarray
                 raise RadarSNNError(f"{what} has input nodes {ports}; name one as NODE=FILE.npy "
                                     f"(got {item!r})")
             port, path = ports[0], item
-        try:
-            arrays[port] = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as err:
-            raise RadarSNNError(f"cannot read calibration {path!r} for {port!r}: {err}") from None
+        arrays[port] = read_npy(path, f"calibration {path!r} for {port!r}")
     return arrays
 
 
@@ -77,9 +75,11 @@ def run_emit(source: str | Path, out_dir: str | Path, *, target: str = "loihi2",
         return EMITTERS[backend](path, out_dir, name=name)
     from compiler.calibration import synthetic_inputs
     from compiler.compile import compile_graph
+    from compiler.guards import check_compile
     from ir import Graph
 
     graph = Graph.from_yaml(path)
+    check_compile(graph)  # before the calibration arrays are read or drawn
     inputs = (_load(calibration, graph.input_ids(), f"chain {str(path)!r}") if calibration
               else synthetic_inputs(graph, seed=0))
     program = compile_graph(graph, target=target, calibration_inputs=inputs,

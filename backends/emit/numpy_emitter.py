@@ -30,6 +30,7 @@ from backends.emit.numpy_host import emit_host
 from backends.emit.numpy_loop import emit_network, import_from
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.reference.guards import check_simulation
 from backends.reference.plan import build_plan
 from compiler.program import CompiledProgram, Segment
 from compiler.snn.network import SpikingNetwork
@@ -144,6 +145,8 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
     for seg in segments:
         if seg.kind == "spiking":
             module = f"network_{len(net_names)}"
+            seg.network.validate()  # the plan's per-step arrays: refuse before allocating
+            check_simulation(seg.network, 1, max_time_s=None)
             plan = build_plan(seg.network, arithmetic)
             files[module + ".py"] = emit_network(pkg, plan, integer, header)
             net_names.append({"module": module, "network": seg.network.name})

@@ -1,7 +1,8 @@
 r"""Input checking and spike trains of the source populations.
 
 :func:`encode_inputs` checks ``simulate``'s inputs against the network's
-encoders (ports, shapes, dtypes, finiteness), splits signed/complex values onto
+encoders (ports, shapes, dtypes, finiteness, the codes' ranges under the policy
+of :mod:`backends.reference.input_range`), splits signed/complex values onto
 the ``part`` axis and returns one spike *train* per source population, built by
 the encoder's code type through the registry :data:`TRAINS`:
 
@@ -24,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from backends.reference.input_range import DEFAULT_POLICY, check_policy, check_range
+from backends.reference.order import order_by_step
 from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
 from ir.errors import NetworkError, SimulationError
@@ -56,7 +59,7 @@ class LatencyTrain:
         """Spike steps of ``values`` (shape ``(frames, size)``) under ``code``."""
         steps = code.spike_steps(values).ravel()
         flat = np.flatnonzero(steps < min(code.t_max, n_steps))
-        order = np.argsort(steps[flat], kind="stable")
+        order = order_by_step(steps[flat], n_steps)
         flat, steps = flat[order], steps[flat][order]
         return cls(flat, steps, np.searchsorted(steps, np.arange(n_steps + 1)))
 
@@ -135,6 +138,9 @@ def encode_inputs(
     network: SpikingNetwork,
     inputs: Mapping[str, np.ndarray],
     trains: Mapping[str, Callable[..., Train]] = TRAINS,
+    *,
+    out_of_range: str | Mapping[str, str] = DEFAULT_POLICY,
+    clipped: dict[str, int] | None = None,
 ) -> tuple[dict[str, Train], int, bool]:
     """Check ``inputs`` and turn them into one spike train per source population.
 
@@ -147,6 +153,14 @@ def encode_inputs(
         leading frames axis (the same number of frames for every port).
     trains : mapping
         Train builder per code type (default :data:`TRAINS`).
+    out_of_range : {"reject", "warn", "clip"} or mapping of port to it
+        What to do with finite values outside a code's range
+        (:mod:`backends.reference.input_range`): refuse them, clip them with a
+        warning (default), or clip them (per port with a mapping; ports it leaves
+        out take the default).
+    clipped : dict, optional
+        Filled with the number of clipped values per port (``clip`` policy; a
+        port without any is left out).
 
     Returns
     -------
@@ -161,7 +175,9 @@ def encode_inputs(
     ------
     SimulationError
         For missing or extra ports, a wrong shape, a non-numeric or complex
-        array where the split is real, NaN/Inf, or disagreeing frame counts.
+        array where the split is real, NaN/Inf (under every policy), values
+        outside a code's range (``reject``), disagreeing frame counts, or an
+        unknown policy.
     NetworkError
         If two encoders feed one population.
 
@@ -177,6 +193,8 @@ def encode_inputs(
     (3, True, [[0, 2, 4, 1, 3, 5], [0, 0, 0, 2, 2, 2]])
     """
     ports = {e.port: e for e in network.encoders}
+    policies = {port: check_policy(out_of_range.get(port, DEFAULT_POLICY) if isinstance(
+        out_of_range, Mapping) else out_of_range, f"network {network.name!r}") for port in ports}
     missing, extra = sorted(set(ports) - set(inputs)), sorted(set(inputs) - set(ports))
     if missing or extra:
         raise SimulationError(f"network {network.name!r}: inputs must be exactly the ports "
@@ -202,7 +220,13 @@ def encode_inputs(
     for port, enc in ports.items():
         x = arrays[port] if n is not None else arrays[port][None]
         x = normalize_values(x, _normalize_axes(network, enc))
-        parts = split_values(x, enc.split).reshape(n_frames, -1)
+        parts = split_values(x, enc.split)
+        count = check_range(port, enc.code, parts, n_parts=N_PARTS[enc.split],
+                            n_steps=network.n_steps, framed=n is not None,
+                            policy=policies[port], values=x)
+        if count and clipped is not None:
+            clipped[port] = count
+        parts = parts.reshape(n_frames, -1)
         out[enc.population] = trains[enc.code.type](enc.code, parts, network.n_steps)
     return out, n_frames, n is not None
 
@@ -221,9 +245,12 @@ def _normalize_axes(network: SpikingNetwork, enc) -> tuple[int, ...]:
 def _check_array(
     network: SpikingNetwork, port: str, split: str, value: object
 ) -> tuple[np.ndarray, int | None]:
-    x = np.asarray(value)
+    try:
+        x = np.asarray(value)
+    except (ValueError, TypeError) as err:  # ragged nested lists, objects numpy cannot hold
+        raise SimulationError(f"input {port!r}: not an array ({err})", node=port) from None
     want = value_shape(network, port)
-    if not (np.issubdtype(x.dtype, np.number) or x.dtype == bool):
+    if x.dtype.kind not in "biufc":  # not timedelta/datetime (numpy counts m8 as a number)
         raise SimulationError(f"input {port!r}: expected a numeric array, got dtype {x.dtype}",
                               node=port)
     if np.iscomplexobj(x) and split not in ("re_im", "re_im_signed"):
@@ -239,6 +266,9 @@ def _check_array(
                               f"with n_frames >= 1, got {x.shape}", node=port)
     bad = ~np.isfinite(x)
     if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
         raise SimulationError(f"input {port!r}: {int(bad.sum())} of {x.size} values are NaN or "
-                              "Inf; clean or clip the input first", node=port)
+                              f"Inf, first at index {first}; NaN/Inf are refused under every "
+                              "out_of_range policy: clean the input first (e.g. np.nan_to_num)",
+                              node=port)
     return x, n

@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
+from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
@@ -32,7 +34,7 @@ from compiler.program import CompiledProgram
 from ir.errors import SimulationError
 from ir.evaluate import EVAL_REGISTRY, check_input
 
-__all__ = ["ProgramResult", "program_plans", "run_program"]
+__all__ = ["ProgramResult", "check_program", "program_plans", "run_program"]
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,11 @@ class ProgramResult:
         return {k: v for s in self.simulations for k, v in s.synaptic_events.items()}
 
     @property
+    def clipped(self) -> dict[str, int]:
+        """Per encoder port of every segment, the values clipped to the encoder's range."""
+        return {k: v for s in self.simulations for k, v in s.clipped.items()}
+
+    @property
     def total_spikes(self) -> int:
         """Spikes of every population of every segment."""
         return sum(s.total_spikes for s in self.simulations)
@@ -88,6 +95,81 @@ class ProgramResult:
         return "\n".join(lines)
 
 
+def check_program(program: CompiledProgram) -> None:
+    """Check that the segments of ``program`` fit its graph and each other.
+
+    Every segment reads values that exist by then (graph inputs or earlier
+    outputs) and produces its own: a host segment exactly its node, from the
+    node's inputs; a spiking segment the decoder ports of its network, from its
+    encoder ports.  No value is produced twice, and every output node is produced.
+
+    Raises
+    ------
+    SimulationError
+        Naming the segment (by index) and the node or port at fault.
+
+    Examples
+    --------
+    >>> from compiler.program import Segment
+    >>> from compiler.compile import compile_graph
+    >>> from ir import Graph
+    >>> g = Graph.from_dict({"nodes": [{"id": "a", "op": "input", "shape": {"r": 2}},
+    ...                                {"id": "o", "op": "output", "input": "a"}]})
+    >>> p = compile_graph(g, target=None)
+    >>> check_program(p)
+    >>> p.segments = [Segment(kind="host", inputs=["o"], outputs=["o"], node="o")]
+    >>> check_program(p)
+    Traceback (most recent call last):
+    ...
+    ir.errors.SimulationError: program 'chain', segment 0 (host 'o'): reads ['o'], but node 'o' \
+reads ['a']
+    """
+    graph = program.graph
+    where = f"program {graph.name!r}"
+    if not isinstance(program.segments, list):
+        raise SimulationError(f"{where}: segments must be a list; got "
+                              f"{type(program.segments).__name__}")
+    have = set(graph.input_ids())
+    for index, seg in enumerate(program.segments):
+        kind = getattr(seg, "kind", None)
+        at = f"{where}, segment {index} ({kind})"
+        if kind == "host":
+            at = f"{where}, segment {index} (host {seg.node!r})"
+            if seg.node not in graph or graph.op(seg.node).arity == 0:
+                raise SimulationError(f"{at}: not a computing node of the graph", node=None)
+            if list(seg.inputs) != list(graph.inputs_of(seg.node)):
+                raise SimulationError(f"{at}: reads {list(seg.inputs)}, but node {seg.node!r} "
+                                      f"reads {list(graph.inputs_of(seg.node))}", node=seg.node)
+            if list(seg.outputs) != [seg.node]:
+                raise SimulationError(f"{at}: must produce [{seg.node!r}], not "
+                                      f"{list(seg.outputs)}", node=seg.node)
+        elif kind == "spiking":
+            net = seg.network
+            ports = sorted(e.port for e in getattr(net, "encoders", []))
+            outs = sorted(d.port for d in getattr(net, "decoders", []))
+            if sorted(seg.inputs) != ports or sorted(seg.outputs) != outs:
+                raise SimulationError(f"{at}: reads {list(seg.inputs)} and produces "
+                                      f"{list(seg.outputs)}, but its network's encoder ports are "
+                                      f"{ports} and decoder ports {outs}")
+            stray = [n for n in (*seg.inputs, *seg.outputs) if n not in graph]
+            if stray:
+                raise SimulationError(f"{at}: ports {stray} are not nodes of the graph")
+        else:
+            raise SimulationError(f"{at}: kind must be 'spiking' or 'host'")
+        missing = [n for n in seg.inputs if n not in have]
+        if missing:
+            raise SimulationError(f"{at}: reads {missing} before any segment produces them",
+                                  node=missing[0])
+        again = [n for n in seg.outputs if n in have]
+        if again:
+            raise SimulationError(f"{at}: produces {again} a second time", node=again[0])
+        have.update(seg.outputs)
+    never = [n for n in graph.output_ids() if n not in have]
+    if never:
+        raise SimulationError(f"{where}: no segment produces the output nodes {never}",
+                              node=never[0])
+
+
 def program_plans(program: CompiledProgram, arithmetic: str = "float64") -> list[SimPlan]:
     """One :class:`SimPlan` per spiking segment, to reuse over many frames with ``plans=``.
 
@@ -100,7 +182,9 @@ def program_plans(program: CompiledProgram, arithmetic: str = "float64") -> list
 
 def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 mode: str = "auto", arithmetic: str = "float64", record_spikes: bool = False,
-                plans: Sequence[SimPlan] | None = None) -> ProgramResult:
+                plans: Sequence[SimPlan] | None = None, out_of_range: str = DEFAULT_POLICY,
+                max_memory_bytes: int | None = MAX_MEMORY_BYTES,
+                max_time_s: float | None = MAX_TIME_S) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
     Parameters
@@ -115,12 +199,35 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         Keep spike rasters (see :func:`~backends.reference.simulate`).
     plans : sequence of SimPlan, optional
         :func:`program_plans` of this program, built once for many runs.
+    out_of_range : {"reject", "warn", "clip"}
+        Policy for values above an encoder's range
+        (:mod:`backends.reference.input_range`) where the value comes from the
+        caller's inputs through host segments only.  Values decoded from an
+        upstream spiking segment carry that segment's approximation error, so
+        they are always clipped; every clipped value is counted in
+        :attr:`ProgramResult.clipped`.
+    max_memory_bytes, max_time_s : int, float or None
+        Limits on each spiking segment's estimate (see :func:`~backends.reference.simulate`).
 
     Raises
     ------
+    IRError
+        An input array of the wrong shape or dtype, or with NaN/Inf (naming the input).
     SimulationError
-        Missing or unknown inputs, or a segment that cannot run.
+        Missing or unknown inputs, a value out of an encoder's range under
+        ``reject``, an unknown policy, or a segment that cannot run.
     """
+    where = f"program {program.graph.name!r}"
+    check_policy(out_of_range, where)
+    if not isinstance(inputs, Mapping):
+        raise SimulationError(f"{where}: inputs must be a mapping of input node id to array; "
+                              f"got {type(inputs).__name__}")
+    if not isinstance(mode, str) or mode not in ("step", "closed", "auto"):
+        raise SimulationError(f"{where}: mode {mode!r} is not one of ('step', 'closed', 'auto')")
+    if not isinstance(arithmetic, str) or arithmetic not in ("float64", "int64"):
+        raise SimulationError(f"{where}: arithmetic {arithmetic!r} is not one of "
+                              "('float64', 'int64')")
+    check_program(program)
     graph = program.graph
     types = graph.infer_types()
     expected = set(graph.input_ids())
@@ -130,6 +237,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                               f"graph's input nodes {sorted(expected)} (missing "
                               f"{sorted(missing)}, unknown {sorted(extra)})")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
+    decoded: set[str] = set()  # nodes whose value went through a spiking segment's decoder
     sims = []
     if plans is not None and len(plans) != len(program.networks):
         raise SimulationError(f"program {graph.name!r}: {len(plans)} plans given for "
@@ -137,8 +245,12 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     for seg in program.segments:
         if seg.kind == "spiking":
             plan = None if plans is None else plans[len(sims)]
+            policy = {p: "clip" if p in decoded else out_of_range for p in seg.inputs}
             result = simulate(seg.network, {p: values[p] for p in seg.inputs}, mode=mode,
-                              arithmetic=arithmetic, record_spikes=record_spikes, plan=plan)
+                              arithmetic=arithmetic, record_spikes=record_spikes, plan=plan,
+                              out_of_range=policy, max_memory_bytes=max_memory_bytes,
+                              max_time_s=max_time_s)
+            decoded.update(result.outputs)
             # a decoded mask (0/1 from spikes) is a boolean array, like the interpreter's
             values.update({k: (np.asarray(v) != 0) if types[k].domain == "mask" else v
                            for k, v in result.outputs.items()})
@@ -148,5 +260,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
             args = [values[i] for i in seg.inputs]
             values[seg.node] = EVAL_REGISTRY[type(op)](seg.node, op, args,
                                                        [types[i] for i in seg.inputs])
+            if decoded.intersection(seg.inputs):
+                decoded.add(seg.node)
     outputs = {k: values[k] for k in graph.output_ids()}
     return ProgramResult(values=values, outputs=outputs, simulations=sims)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -59,6 +59,9 @@ class SimResult:
         The arithmetic used.
     n_steps, n_frames : int
         Steps per frame and frames in the batch.
+    clipped : dict of str to int
+        Per input port, how many values were outside the encoder's range and
+        clipped (``out_of_range="clip"``; ports without any are left out).
     """
 
     outputs: dict[str, np.ndarray]
@@ -70,6 +73,7 @@ class SimResult:
     arithmetic: str
     n_steps: int
     n_frames: int
+    clipped: dict[str, int] = field(default_factory=dict)
 
     @property
     def total_spikes(self) -> int:
@@ -101,4 +105,6 @@ class SimResult:
         lines += [f"  population {k}: {v} spikes" for k, v in self.spike_counts.items()]
         lines += [f"  projection {k}: {v} synaptic events" for k, v in self.synaptic_events.items()]
         lines += [f"  output {k}: shape {v.shape}" for k, v in self.outputs.items()]
+        lines += [f"  input {k}: {v} values outside the encoder's range, clipped"
+                  for k, v in self.clipped.items()]
         return "\n".join(lines)

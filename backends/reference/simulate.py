@@ -10,6 +10,8 @@ import numpy as np
 from backends.reference.closed import closed_form_problems, run_closed
 from backends.reference.decoding import check_decoders, decode_outputs
 from backends.reference.encoding import encode_inputs
+from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S, check_simulation, frames_in
+from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import Activity, SimResult
 from backends.reference.step import run_step
@@ -38,6 +40,9 @@ def simulate(
     record_spikes: bool = False,
     raster_limit_bytes: int = RASTER_LIMIT_BYTES,
     plan: SimPlan | None = None,
+    out_of_range: str | Mapping[str, str] = DEFAULT_POLICY,
+    max_memory_bytes: int | None = MAX_MEMORY_BYTES,
+    max_time_s: float | None = MAX_TIME_S,
 ) -> SimResult | ProgramResult:
     """Simulate a spiking network (or a whole compiled program) on a batch of inputs.
 
@@ -65,6 +70,16 @@ def simulate(
         Refuse ``record_spikes`` when the rasters would exceed this many bytes.
     plan : SimPlan, optional
         A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).
+    out_of_range : {"reject", "warn", "clip"} or mapping of port to it
+        Finite input values above an encoder's range
+        (:mod:`backends.reference.input_range`): refuse them, clip them with an
+        ``OutOfRangeWarning`` (default), or clip them; clipped values are counted
+        in :attr:`SimResult.clipped`.  NaN/Inf are always refused.
+    max_memory_bytes : int or None
+        Refuse, before allocating, a run whose estimated memory
+        (:mod:`backends.reference.guards`) exceeds this (None: no limit).
+    max_time_s : float or None
+        Refuse a run whose estimated time exceeds this many seconds (None: no limit).
 
     Returns
     -------
@@ -77,9 +92,11 @@ def simulate(
     NetworkError
         If the network does not validate, or a decoder cannot be honoured.
     SimulationError
-        For bad inputs (ports, shapes, complex into a real split, NaN/Inf), an
-        unknown mode or arithmetic, ``mode="closed"`` on an ineligible network,
-        non-integer parameters under ``int64``, or rasters over the limit.
+        For bad inputs (ports, shapes, complex into a real split, NaN/Inf, values
+        outside an encoder's range under ``reject``), an unknown mode, arithmetic
+        or policy, ``mode="closed"`` on an ineligible network, non-integer
+        parameters under ``int64``, rasters over the limit, or an estimated
+        memory or time over ``max_memory_bytes`` / ``max_time_s``.
 
     Notes
     -----
@@ -119,10 +136,21 @@ def simulate(
             raise SimulationError("a compiled program takes plans=program_plans(program) in "
                                   "run_program(), not plan=")
         return run_program(network, inputs, mode=mode, arithmetic=arithmetic,
-                           record_spikes=record_spikes)
-    if mode not in (*ENGINES, "auto"):
+                           record_spikes=record_spikes, out_of_range=out_of_range,
+                           max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
+    if not isinstance(mode, str) or mode not in (*ENGINES, "auto"):
         raise SimulationError(f"network {network.name!r}: mode {mode!r} is not one of "
                               f"{(*ENGINES, 'auto')}")
+    if not isinstance(inputs, Mapping):
+        raise SimulationError(f"network {network.name!r}: inputs must be a mapping of port to "
+                              f"array; got {type(inputs).__name__}")
+    network.validate()
+    problems = closed_form_problems(network) if mode != "step" else []
+    check_simulation(network, frames_in(network, inputs),
+                     mode="step" if mode == "step" or problems else "closed",
+                     record_spikes=record_spikes, max_memory_bytes=max_memory_bytes,
+                     max_time_s=max_time_s,
+                     closed_eligible=mode == "step" and not closed_form_problems(network))
     if plan is None:
         plan = build_plan(network, arithmetic)
     elif plan.network is not network or plan.arithmetic != arithmetic:
@@ -130,12 +158,13 @@ def simulate(
                               f"{plan.network.name!r} with arithmetic {plan.arithmetic!r}; build "
                               f"it with build_plan(network, {arithmetic!r})")
     check_decoders(network)
-    problems = closed_form_problems(network) if mode != "step" else []
     if mode == "closed" and problems:
         raise SimulationError(f"network {network.name!r} cannot use mode='closed': "
                               + "; ".join(problems) + "; use mode='step'")
     run = "step" if mode == "step" or problems else "closed"
-    trains, n_frames, framed = encode_inputs(network, inputs)
+    clipped: dict[str, int] = {}
+    trains, n_frames, framed = encode_inputs(network, inputs, out_of_range=out_of_range,
+                                             clipped=clipped)
     if record_spikes:
         need = n_frames * network.n_steps * sum(p.size for p in network.populations)
         if need > raster_limit_bytes:
@@ -159,4 +188,5 @@ def simulate(
         arithmetic=arithmetic,
         n_steps=network.n_steps,
         n_frames=n_frames,
+        clipped=clipped,
     )

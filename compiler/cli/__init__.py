@@ -45,9 +45,20 @@ def _version() -> str:
         return "0+unknown"
 
 
+class UsageError(Exception):
+    """A bad command line (argparse's complaint), reported like every other error."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``error: …``), not usage text and exit."""
+
+    def error(self, message: str):  # argparse's hook; also used by the sub-parsers
+        raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``radarsnn`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="radarsnn",
         description="Compile automotive-radar DSP chains into spiking neural networks.")
     parser.add_argument("--version", action="version", version=f"radarsnn {_version()}")
@@ -60,7 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
-    message = str(err)
+    message = " ".join(str(err).split())  # one line, whatever a library put in the message
     if isinstance(err, OSError) and not isinstance(err, RadarSNNError):
         message = f"{err.strerror or err}: {err.filename}" if err.filename else str(err)
     if args is not None and getattr(args, "json", False):
@@ -73,7 +84,11 @@ def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 2 on an error, 1 on a failed check)."""
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except UsageError as err:
+        return _error_exit(err, argparse.Namespace(json="--json" in argv))
     try:
         return args.func(args)
     except (RadarSNNError, OSError) as err:

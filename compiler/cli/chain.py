@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ir.errors import RadarSNNError
 
-__all__ = ["add_parsers", "load_arrays", "parse_options"]
+__all__ = ["add_parsers", "load_arrays", "parse_options", "read_npy"]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -57,7 +57,6 @@ def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
         An unknown port, a bare file with several ports, or a file that is not
         a readable ``.npy`` array (pickled object arrays are refused).
     """
-    import numpy as np
 
     arrays = {}
     for item in items:
@@ -69,11 +68,56 @@ def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
             port, path = ports[0], item
         if port not in ports:
             raise RadarSNNError(f"{what} has no input port {port!r}; its ports are {ports}")
-        try:
-            arrays[port] = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as err:
-            raise RadarSNNError(f"cannot read input {path!r} for port {port!r}: {err}") from None
+        arrays[port] = read_npy(path, f"input {path!r} for port {port!r}")
     return arrays
+
+
+def read_npy(path: str, what: str):
+    """One array from a ``.npy`` file, never unpickling; ``what`` names it in errors.
+
+    The header is read first: object dtypes are refused and the data it declares
+    must be in the file, so a damaged header cannot make numpy allocate or parse
+    beyond the file.
+
+    Raises
+    ------
+    RadarSNNError
+        Missing, empty, truncated or damaged files, object arrays, ``.npz`` archives.
+    """
+    import tokenize
+
+    import numpy as np
+
+    fmt = np.lib.format
+    failures = (OSError, ValueError, EOFError, SyntaxError, tokenize.TokenError, OverflowError,
+                MemoryError, TypeError)
+    try:
+        with open(path, "rb") as f:
+            if f.read(4) == b"PK\x03\x04":
+                raise RadarSNNError(f"cannot read {what}: it is a .npz archive; give one array "
+                                    "per .npy file (np.save)")
+            f.seek(0)
+            version = fmt.read_magic(f)
+            shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
+                               else fmt.read_array_header_2_0(f))
+            if dtype.hasobject:
+                raise RadarSNNError(f"cannot read {what}: object arrays are refused (loading "
+                                    "them would unpickle code); save a numeric array")
+            need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+            have = _remaining(f)
+            if have < need:
+                raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
+                                    f"({need} bytes) but the file holds {have}; truncated?")
+        return np.load(path, allow_pickle=False)
+    except failures as err:
+        raise RadarSNNError(f"cannot read {what}: {err or type(err).__name__}") from None
+
+
+def _remaining(f) -> int:
+    here = f.tell()
+    end = f.seek(0, 2)
+    f.seek(here)
+    return end - here
 
 
 def parse_options(items: list[str] | None) -> dict:
@@ -94,7 +138,10 @@ def parse_options(items: list[str] | None) -> dict:
         try:
             options[key] = yaml.safe_load(value)
         except yaml.YAMLError as err:
-            raise RadarSNNError(f"option {key!r}: value {value!r} is not YAML ({err})") from None
+            from ir.serialize import describe_yaml_error
+
+            raise RadarSNNError(f"option {key!r}: value {value!r} is not YAML "
+                                f"({describe_yaml_error(err)})") from None
     return options
 
 
@@ -102,10 +149,15 @@ def _compile(args: argparse.Namespace, target: str | None):
     """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
     from compiler.calibration import synthetic_inputs
     from compiler.compile import compile_graph, default_pipeline
+    from compiler.guards import check_compile, limits_from_options
     from compiler.progress import make_progress
     from ir import Graph
 
     graph = Graph.from_yaml(args.chain)
+    options = parse_options(getattr(args, "option", None))
+    max_memory_bytes, max_time_s = limits_from_options(options)
+    # before the calibration arrays are read or drawn: they are part of the estimate
+    check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
     if args.calibration:
         calibration = load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}")
         note = "calibrated on the given inputs"
@@ -119,7 +171,6 @@ def _compile(args: argparse.Namespace, target: str | None):
         if not sep:
             raise RadarSNNError(f"--motif {m!r} is not NODE_OR_OP=MOTIF (e.g. dft=time-fft)")
         motifs[key] = value
-    options = parse_options(getattr(args, "option", None))
     if getattr(args, "repetitions", None):
         options["repetitions"] = args.repetitions
     n_passes = len(default_pipeline(options, hardware=target is not None))
@@ -193,13 +244,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
     else:
         ports = [e.port for e in loaded.encoders]
     inputs = load_arrays(args.input, ports, f"artifact {args.artifact}")
-    result = simulate(loaded, inputs, mode=args.mode)
+    result = simulate(loaded, inputs, mode=args.mode,
+                      out_of_range="clip" if args.clip else "reject")
     if args.output:
         np.savez(args.output, **{k: np.asarray(v) for k, v in result.outputs.items()})
     if args.json:
         print(json.dumps({"mode": result.mode, "spikes": result.total_spikes,
                           "synaptic_events": result.total_synaptic_events,
-                          "spike_counts": result.spike_counts,
+                          "spike_counts": result.spike_counts, "clipped": result.clipped,
                           "outputs": {k: list(np.shape(v)) for k, v in result.outputs.items()}},
                          sort_keys=True))
     elif not args.quiet:
@@ -256,6 +308,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]X.npy",
                    help="input array per port (repeat for several ports)")
     p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
+    p.add_argument("--clip", action="store_true",
+                   help="clip input values outside the encoders' calibrated range (default: "
+                        "refuse them); the count is reported")
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing")

@@ -149,13 +149,16 @@ loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
     if isinstance(target, str) and target in BUILTIN_PROFILES:
         text = resources.files("compiler.hardware").joinpath(f"profiles/{target}.yaml")
         return _from_text(text.read_text(encoding="utf-8"), f"built-in profile {target!r}")
+    if not isinstance(target, str | Path):
+        raise CompileError(f"hardware target must be a profile name, a YAML path or a "
+                           f"HardwareProfile; got {type(target).__name__} {target!r}")
     path = Path(target)
     if not (isinstance(target, Path) or path.suffix in (".yaml", ".yml")):
         raise CompileError(f"unknown hardware profile {target!r}; built-in profiles are "
                            f"{', '.join(BUILTIN_PROFILES)}, or give a path to a YAML profile file")
     try:
         text = path.read_text(encoding="utf-8")
-    except OSError as err:
+    except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
         raise CompileError(f"hardware profile file {str(path)!r} cannot be read: {err}") from err
     return _from_text(text, f"hardware profile file {str(path)!r}")
 
@@ -164,12 +167,14 @@ def _from_text(text: str, label: str) -> HardwareProfile:
     try:
         data: Any = yaml.safe_load(text)
     except yaml.YAMLError as err:
-        raise CompileError(f"{label}: not valid YAML: {err}") from err
+        from ir.serialize import describe_yaml_error
+
+        raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
     if not isinstance(data, dict):
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
-    try:
-        return HardwareProfile(**data)
+    try:  # model_validate: a non-string key is a field error, not a TypeError of **data
+        return HardwareProfile.model_validate(data)
     except ValidationError as err:
         parts = [f"field '{'.'.join(map(str, e['loc']))}' = {e.get('input')!r}: {e['msg']}"
                  for e in err.errors(include_url=False)]

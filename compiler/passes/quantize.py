@@ -203,6 +203,9 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
 
 
 # --------------------------------------------------------------------------- delays
+#: Most relay stages one long delay may need (a 6-bit target: delays up to ~64 k steps).
+MAX_RELAY_STAGES = 1024
+
 def _relay_population(src: Population, stage: int) -> Population:
     return Population(id=f"{src.id}__relay{stage}", shape=dict(src.shape),
                       params=NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="subtract"),
@@ -257,6 +260,15 @@ def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_de
                "steps" if limit else "a target without delays cannot relay them; use a target "
                "with delay bits"),
             node=tgt.origin.get("node", p.id))
+    deepest = max(network.projections, key=lambda p: p.max_delay)
+    stages = -(-deepest.max_delay // limit) - 1
+    if stages > MAX_RELAY_STAGES:  # each stage is a loop turn and a population: refuse early
+        tgt = pops[deepest.target]
+        raise BudgetError(
+            f"{describe(tgt)}: projection {deepest.id!r} has a delay of {deepest.max_delay} "
+            f"steps, which needs {stages} relay stages of at most {limit} steps (over the "
+            f"limit of {MAX_RELAY_STAGES}); use fewer time steps or a target with more delay "
+            "bits", node=tgt.origin.get("node", deepest.id))
     new_pops = list(network.populations)
     projs: list = []
     relays: dict[tuple[str, int], Population] = {}

@@ -1,0 +1,195 @@
+r"""The out-of-range policy of the encoders: find values a code cannot represent, then
+refuse them or clip them on request.
+
+An encoder's code represents the values in ``[x_min, x_max]`` (its *range*, set
+by calibration).  Values above it saturate: a latency code would have to spike
+before its window opens, a rate code faster than its top rate, and the code
+clips them.  A value is *out of range* when clipping changes its spikes:
+
+.. math::
+
+    \text{latency:}\quad x > x^{*} = \mathrm{value\_of}(t_{min} - \tfrac12)
+    \ (\text{nearest rounding}), \quad x > x_{max}\ (\text{floor rounding}),\qquad
+    \text{rate:}\quad \lfloor T r(x) + \varphi\rfloor > \lfloor T r_{max} + \varphi\rfloor
+
+(``value_of`` extrapolates the code's linear or log map; a value within half a
+step above ``x_max`` spikes at ``t_min`` exactly like ``x_max``, so it loses
+nothing).  Values below ``x_min`` are the code's *floor*: they read as "no spike"
+(latency) or rate 0, like ``x_min`` itself, by the code's definition.  A code whose
+window is one step (``t_max - t_min = 1``) is a threshold — every value has its
+one-bit meaning — and is never out of range.  ``NaN`` and ``±Inf`` are refused
+before this check under every policy.
+
+The check runs on the encoded parts (after per-input normalisation and the
+signed/complex split); a value counts once however many of its parts are out.
+
+Policies (:data:`POLICIES`): ``"reject"`` raises :class:`~ir.errors.SimulationError`
+naming the port, the count, the first index and the range; ``"warn"`` (the default,
+:data:`DEFAULT_POLICY`) lets the code clip them and warns with the same facts
+(:class:`OutOfRangeWarning`); ``"clip"`` clips without a warning.  Under every
+policy the caller reports the count (``SimResult.clipped``), so out-of-range values
+are never propagated into spike times silently.
+
+Why ``warn`` and not ``reject`` by default: the compiler's default calibration has no
+headroom (option ``headroom=1``), programs are calibrated on one frame and run on
+others (the README's quick start overshoots by 1 %), and the CFAR motifs bound their
+codes by quantiles on purpose (``cfar_quantiles``); refusing by default would stop
+those runs.  ``radarsnn run`` refuses by default (``--clip`` to clip).
+
+Examples
+--------
+>>> import warnings
+
+import numpy as np
+>>> from compiler.snn import LatencyCode
+>>> code = LatencyCode(t_max=8, x_min=0.0, x_max=1.0)   # one step = 1/8; x* = 1.0625
+>>> parts = np.array([[0.5, 1.05, -0.25, 2.0, 1.07]])     # (frames, values), split "none"
+>>> out_of_range(code, parts, n_parts=0, n_steps=8).tolist()
+[[False, False, False, True, True]]
+>>> check_range("x", code, parts, n_parts=0, n_steps=8, framed=False, policy="clip")
+2
+>>> check_range("x", code, parts, n_parts=0, n_steps=8, framed=False,
+...             policy="reject")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+ir.errors.SimulationError: input 'x': 2 of 5 values are above the encoder's range [0, 1] ...
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from compiler.snn.coding import LatencyCode, RateCode
+from ir.errors import SimulationError
+
+__all__ = ["DEFAULT_POLICY", "POLICIES", "OutOfRangeWarning", "check_policy", "check_range",
+           "out_of_range"]
+
+#: What :func:`check_range` does with values outside a code's range.
+POLICIES = ("reject", "warn", "clip")
+#: The policy of :func:`~backends.reference.simulate` and ``run_program`` unless told.
+DEFAULT_POLICY = "warn"
+
+
+class OutOfRangeWarning(UserWarning):
+    """Input values above an encoder's range were clipped (policy ``"warn"``)."""
+
+
+def check_policy(policy: object, where: str) -> str:
+    """``policy`` if it is one of :data:`POLICIES`, else a :class:`SimulationError`.
+
+    Examples
+    --------
+    >>> check_policy("clip", "network 'n'")
+    'clip'
+    >>> check_policy("wrap", "network 'n'")
+    Traceback (most recent call last):
+    ...
+    ir.errors.SimulationError: network 'n': out_of_range='wrap' is not one of ('reject', 'warn', \
+'clip')
+    """
+    if not isinstance(policy, str) or policy not in POLICIES:
+        raise SimulationError(f"{where}: out_of_range={policy!r} is not one of {POLICIES}")
+    return policy
+
+
+def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
+                 n_steps: int) -> np.ndarray:
+    """Which values (not parts) clipping would change (see the module for the rule).
+
+    Parameters
+    ----------
+    code : LatencyCode or RateCode
+        The encoder's code.
+    parts : ndarray
+        Encoded parts, ``(frames, *value_shape)`` plus a trailing part axis when
+        ``n_parts > 0``; finite.
+    n_parts : int
+        Size of the trailing part axis (0: no part axis).
+    n_steps : int
+        Steps of the network (the window of a rate code).
+
+    Returns
+    -------
+    ndarray of bool
+        ``(frames, *value_shape)``: True where some part is out of range.
+    """
+    if code.type == "latency":
+        if code.t_max - code.t_min <= 1:  # a threshold: every value has its meaning
+            bad = np.zeros(parts.shape, bool)
+        elif code.rounding == "floor":
+            bad = parts > code.x_max
+        else:
+            edge = code.t_min - 0.5
+            bound = float(code.value_of(np.array(edge)))
+            bad = (parts > bound) | ((parts == bound) & (np.rint(edge) < code.t_min))
+    else:
+        rate = code.max_rate * (parts - code.x_min) / (code.x_max - code.x_min)
+        bad = np.floor(n_steps * rate + code.phase) > np.floor(n_steps * code.max_rate
+                                                               + code.phase)
+    return bad.any(axis=-1) if n_parts else bad
+
+
+def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n_parts: int,
+                n_steps: int, framed: bool, policy: str, values: np.ndarray | None = None) -> int:
+    """Apply the out-of-range policy to one port's encoded parts.
+
+    Parameters
+    ----------
+    port : str
+        The encoder port (named in the error).
+    code : LatencyCode or RateCode
+        Its code.
+    parts : ndarray
+        As for :func:`out_of_range`.
+    n_parts, n_steps : int
+        As for :func:`out_of_range`.
+    framed : bool
+        Whether the caller's array had a frames axis (it is then part of the index).
+    policy : {"reject", "warn", "clip"}
+        Refuse; or accept (the codes clip), warn (``warn``) and return the count.
+    values : ndarray, optional
+        The values as given, ``(frames, *value_shape)``, to quote the first one
+        (default: the first offending part).
+
+    Returns
+    -------
+    int
+        How many values are out of range (0 under ``reject``, which raises).
+
+    Raises
+    ------
+    SimulationError
+        Under ``reject`` when any value is out of range: the port, the count, the
+        first index (frames first iff ``framed``), its value, the range and the two
+        ways out.
+
+    Warns
+    -----
+    OutOfRangeWarning
+        Under ``warn``, with the same facts.
+    """
+    bad = out_of_range(code, parts, n_parts, n_steps)
+    count = int(np.count_nonzero(bad))
+    if count == 0 or policy == "clip":
+        return count
+    first = tuple(int(i) for i in np.argwhere(bad)[0])
+    index = first if framed else first[1:]
+    value = values[first] if values is not None else np.ravel(parts[first])[0]
+    facts = (f"input {port!r}: {count} of {bad.size} values are above the encoder's range "
+             f"[{code.x_min:.6g}, {code.x_max:.6g}] by more than its resolution (clipping "
+             f"changes their spikes), first at index {index} (value {_quote(value)})")
+    if policy == "warn":
+        warnings.warn(f"{facts}; clipped them (out_of_range='warn'); calibrate on data that "
+                      "covers them (or raise the headroom), or pass out_of_range='clip' (no "
+                      "warning) or 'reject'", OutOfRangeWarning, stacklevel=4)
+        return count
+    raise SimulationError(f"{facts}; calibrate on data that covers them (or raise the "
+                          "headroom), or pass out_of_range='clip' to clip them", node=port)
+
+
+def _quote(value: object) -> str:
+    v = complex(value) if np.iscomplexobj(value) else float(value)
+    return f"{v:.6g}"

@@ -1,0 +1,82 @@
+"""Fuzz: hardware profile files mutated from the built-in ones — load, then use the budgets.
+
+Mutations: junk in any field (wrong types, NaN/Inf, zero/negative/huge counts, hostile
+strings), missing and extra fields, non-string keys, non-mapping documents, and
+byte-level damage (truncation, flipped and inserted bytes, binary garbage).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from fuzz_support import JUNK, budget, byte_mutations, outcome
+from hypothesis import given, note
+from hypothesis import strategies as st
+
+from compiler.hardware import BUILTIN_PROFILES, HardwareProfile, load_profile
+
+TEXTS = {name: resources.files("compiler.hardware").joinpath(f"profiles/{name}.yaml").read_text()
+         for name in BUILTIN_PROFILES}
+FIELDS = sorted(HardwareProfile.model_fields)
+
+
+@pytest.fixture(scope="module")
+def folder():
+    with tempfile.TemporaryDirectory(prefix="fuzz-profile-") as tmp:
+        yield Path(tmp)
+
+
+def _use(path: Path) -> HardwareProfile:
+    profile = load_profile(path)
+    limits = profile.limits()
+    assert limits.shape == (4,) and not np.isnan(limits).any() and (limits >= 1).all()
+    assert profile.n_cores is None or profile.n_cores >= 1
+    assert profile.max_delay_steps is None or profile.max_delay_steps >= 0
+    assert HardwareProfile(**profile.model_dump()) == profile
+    return profile
+
+
+@budget(0.6)
+@given(st.sampled_from(BUILTIN_PROFILES), st.data(), st.integers(0, 9))
+def test_field_mutated_profiles(folder, name, data, slot) -> None:
+    doc = yaml.safe_load(TEXTS[name])
+    touched = []
+    for _ in range(data.draw(st.integers(1, 3))):
+        kind = data.draw(st.sampled_from(["set", "set", "delete", "extra", "key", "document"]))
+        if kind == "set":
+            key = data.draw(st.sampled_from(FIELDS))
+            doc[key] = data.draw(JUNK)
+        elif kind == "delete":
+            key = data.draw(st.sampled_from(sorted(doc, key=str) or ["name"]))
+            doc.pop(key, None)
+        elif kind == "extra":
+            key = data.draw(st.sampled_from(["cores", "neurons", "", "name ", "__class__"]))
+            doc[key] = data.draw(JUNK)
+        elif kind == "key":
+            key = data.draw(st.sampled_from([1, 2.5, True, None, (1, 2)]))
+            doc[key] = 1
+        else:
+            key = "document"
+            doc = data.draw(st.one_of(JUNK, st.lists(st.just(doc), max_size=2)))
+            break
+        touched.append(str(key))
+    path = folder / f"profile{slot}.yaml"
+    path.write_text(yaml.safe_dump(doc, allow_unicode=True) if not isinstance(doc, dict) or all(
+        isinstance(k, str) for k in doc) else yaml.dump(doc, allow_unicode=True))
+    note(path.read_text())
+    outcome(lambda: _use(path), [str(path), *touched])
+
+
+@budget(0.4)
+@given(st.sampled_from(BUILTIN_PROFILES), st.data(), st.integers(0, 9))
+def test_byte_damaged_profiles(folder, name, data, slot) -> None:
+    damaged = data.draw(byte_mutations(TEXTS[name].encode()))
+    path = folder / f"damaged{slot}.yaml"
+    path.write_bytes(damaged)
+    note(repr(damaged))
+    outcome(lambda: _use(path), [str(path)])
