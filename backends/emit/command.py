@@ -12,26 +12,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from backends.emit import EMITTERS
-from compiler.cli.chain import read_npy
-from ir.errors import CompileError, RadarSNNError
+from compiler.cli.chain import load_arrays
+from ir.errors import CompileError
 
 __all__ = ["add_parsers", "run_emit"]
-
-
-def _load(items: list[str], ports: list[str], what: str) -> dict[str, np.ndarray]:
-    arrays = {}
-    for item in items:
-        port, sep, path = item.rpartition("=")
-        if not sep:
-            if len(ports) != 1:
-                raise RadarSNNError(f"{what} has input nodes {ports}; name one as NODE=FILE.npy "
-                                    f"(got {item!r})")
-            port, path = ports[0], item
-        arrays[port] = read_npy(path, f"calibration {path!r} for {port!r}")
-    return arrays
 
 
 def run_emit(source: str | Path, out_dir: str | Path, *, target: str = "loihi2",
@@ -80,7 +65,7 @@ def run_emit(source: str | Path, out_dir: str | Path, *, target: str = "loihi2",
 
     graph = Graph.from_yaml(path)
     check_compile(graph)  # before the calibration arrays are read or drawn
-    inputs = (_load(calibration, graph.input_ids(), f"chain {str(path)!r}") if calibration
+    inputs = (load_arrays(calibration, graph.input_ids(), f"chain {str(path)!r}") if calibration
               else synthetic_inputs(graph, seed=0))
     program = compile_graph(graph, target=target, calibration_inputs=inputs,
                             time_steps=time_steps)
