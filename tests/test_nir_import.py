@@ -121,3 +121,25 @@ def test_errors_name_the_nir_node(tmp_path) -> None:
     lone = nir.NIRGraph.from_list(nir.Linear(weight=np.ones((2, 2))))
     with pytest.raises(IRError, match="Input shape"):
         import_classifier(lone, tmp_path / "d.npz")
+
+
+def test_imported_classifier_is_allocated_on_loihi2(tmp_path) -> None:
+    from backends.reference import run_program
+    from compiler.compile import compile_graph
+    from ir.evaluate import evaluate
+
+    nir.write(tmp_path / "snn.nir", _snn_graph())
+    op = import_classifier(tmp_path / "snn.nir", tmp_path / "snn.npz", time_axis="frame",
+                           encoding={"kind": "levels", "levels": [1.0]})
+    g = Graph.from_dict({"name": "clf", "nodes": [
+        {"id": "roi", "op": "input", "shape": {"object": 2, "frame": 5, "range": 6,
+                                                "doppler": 6}, "domain": "amplitude"},
+        {"id": "cls", **op.model_dump(mode="json"), "input": "roi"},
+        {"id": "o", "op": "output", "input": "cls"}]})
+    x = np.random.default_rng(1).uniform(0, 2, size=(2, 5, 6, 6))
+    program = compile_graph(g, "loihi2", calibration_inputs={"roi": x})
+    totals = program.records["report"].data["totals"]
+    assert totals["cores"] >= 1 and totals["neurons"] > 0  # quantized, split and placed
+    got = run_program(program, {"roi": x}, mode="step", out_of_range="clip").outputs["o"]
+    # 8-bit weights: the class decisions survive quantization on this input
+    assert got.argmax(-1).tolist() == evaluate(g, {"roi": x})["cls"].argmax(-1).tolist()
