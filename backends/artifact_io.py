@@ -292,6 +292,9 @@ def read_bytes(path: Path) -> bytes:
     ir.errors.ArtifactError: /nonexistent/manifest.json: cannot read (...); ...
     """
     try:
+        if path.exists() and not path.is_file():  # a directory, a device (/dev/zero: forever)
+            raise ArtifactError(f"{path}: cannot read (not a regular file); is this an artifact "
+                                "directory written by backends.artifact.save?")
         return path.read_bytes()
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc}); is "

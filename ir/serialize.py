@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -65,6 +66,9 @@ __all__ = [
     "graph_to_json",
     "graph_to_yaml",
 ]
+
+#: Largest chain file read (a device such as /dev/zero would otherwise be read forever).
+MAX_CHAIN_FILE_BYTES = 64 << 20
 
 _TOP_KEYS = ("name", "nodes")
 _ENVELOPE = ("id", "op", "input", "inputs")
@@ -337,6 +341,11 @@ def _read_source(source: str | Path) -> tuple[str, str]:
         source = Path(source)
     if isinstance(source, os.PathLike):
         try:
+            info = Path(source).stat()
+            if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_CHAIN_FILE_BYTES:
+                what = ("not a regular file" if not stat.S_ISREG(info.st_mode) else
+                        f"{info.st_size} bytes, over the {MAX_CHAIN_FILE_BYTES}-byte limit")
+                raise ChainFileError(f"{source}: cannot read the chain file: {what}")
             return Path(source).read_text(encoding="utf-8"), f"{source}: "
         except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
             raise ChainFileError(f"{source}: cannot read the chain file: {err}") from err

@@ -157,6 +157,9 @@ loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
         raise CompileError(f"unknown hardware profile {target!r}; built-in profiles are "
                            f"{', '.join(BUILTIN_PROFILES)}, or give a path to a YAML profile file")
     try:
+        if not path.is_file() or path.stat().st_size > 1 << 20:  # not /dev/zero, not a giant
+            raise CompileError(f"hardware profile file {str(path)!r} cannot be read: not a "
+                               "regular file of at most 1 MiB")
         text = path.read_text(encoding="utf-8")
     except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
         raise CompileError(f"hardware profile file {str(path)!r} cannot be read: {err}") from err
