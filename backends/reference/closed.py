@@ -19,6 +19,10 @@ arrival steps ``a_j = t_j + d_j`` of the synapses ``w_j`` and a segment
 (sums over arrivals in the segment): two event-driven matrix products per
 projection and delay.
 
+*Gated* (``d_u = 1``, ``d_v = 0``, no bias, one excitatory synapse per neuron
+and inhibitory stencils — the OS-CFAR neurons): one comparison per tap at the
+excitatory arrival (:mod:`backends.reference.gate`).
+
 *Charging* (input off, ``d_v = 0``): ``u = 0`` and ``v_0 + k\,b`` first reaches
 ``v_th`` at ``k = \lceil (v_{th} - v_0)/b \rceil`` (checked at ``k-1`` and ``k``).
 
@@ -46,6 +50,7 @@ import numpy as np
 
 from backends.reference.delivery import Delivery
 from backends.reference.encoding import Train
+from backends.reference.gate import gate_inputs, is_gated_segment, solve_gated
 from backends.reference.neuron import NeuronState, Segment, StepParams, neuron_step
 from backends.reference.order import first_spike_steps, order_by_step
 from backends.reference.plan import SimPlan
@@ -147,23 +152,28 @@ def run_closed(
     g = nx.DiGraph([(p.source, p.target) for p in net.projections])
     g.add_nodes_from(plan.populations)
     spikes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    membrane = {}
+    membrane, first = {}, {}
     for pid in nx.lexicographical_topological_sort(g):
         if pid in trains:
             spikes[pid] = trains[pid].all_events()
         else:
-            spikes[pid], membrane[pid] = _solve(plan, pid, spikes, n_frames, block_bytes)
+            spikes[pid], membrane[pid], first[pid] = _solve(plan, pid, spikes, n_frames,
+                                                             block_bytes)
     events = {}
     for qid, dl in plan.deliveries.items():
         flat, step = spikes[dl.source]
-        events[qid] = sum(dl.n_events(k, flat[step + d < n_steps])
+        events[qid] = sum(dl.n_events(k, flat[:_arriving(step, d, n_steps)])
                           for k, d in enumerate(dl.delays))
-    first, counts, rasters = {}, {}, {} if record else None
+    counts, rasters = {}, {} if record else None
     for pid, pop in plan.populations.items():
         flat, step = spikes[pid]
         n = n_frames * pop.size
-        counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
-        first[pid] = first_spike_steps(flat, step, n).reshape(n_frames, -1)
+        if pid in first:  # fire-once neurons: at most one spike each
+            counts[pid] = (first[pid] >= 0).astype(np.int64).reshape(n_frames, -1)
+        else:
+            counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
+        first[pid] = (first[pid] if pid in first else first_spike_steps(flat, step, n)
+                      ).reshape(n_frames, -1)
         if rasters is not None:
             rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
             f, i = np.divmod(flat, pop.size)
@@ -171,9 +181,15 @@ def run_closed(
     return Activity(first, counts, membrane, events, rasters)
 
 
+def _arriving(step: np.ndarray, delay: int, n_steps: int) -> int:
+    """How many of the step-sorted spikes arrive within the window through ``delay``."""
+    return int(np.searchsorted(step, n_steps - delay))
+
+
 def _solve(
     plan: SimPlan, pid: str, spikes: dict, n_frames: int, block_bytes: int
-) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray, np.ndarray]:
+    """Spike events ``(flat, step)`` by step, end membranes and first spike steps of ``pid``."""
     params = plan.neurons[pid]
     n_steps = plan.network.n_steps
     arrivals = []
@@ -181,8 +197,8 @@ def _solve(
         dl = plan.deliveries[qid]
         flat, step = spikes[dl.source]
         for k, d in enumerate(dl.delays):
-            keep = step + d < n_steps
-            arrivals.append(_Arrivals(dl, k, flat[keep], step[keep] + d))
+            stop = _arriving(step, d, n_steps)
+            arrivals.append(_Arrivals(dl, k, flat[:stop], step[:stop] + d if d else step[:stop]))
     pop = plan.populations[pid]
     n = n_frames * pop.size
     dtype = np.int64 if plan.integer else np.float64
@@ -196,22 +212,36 @@ def _solve(
             # the end current u matters only if a later segment takes input (else it is reset)
             need_u = any(s.input_on for s in params.segments[i + 1:])
             u, v = _silent(u, v, seg, params, arrivals, n_frames, pop.dims, need_u=need_u)
+        elif (is_gated_segment(seg, params) and (gates := gate_inputs(plan, pid)) is not None
+              and (end := solve_gated(plan, pid, gates, seg, params, v, first, spikes, n_frames,
+                                      any(s.input_on for s in params.segments[i + 1:])))
+              is not None):
+            u, v = end
         else:
             for s0 in range(seg.start, seg.stop, block):
                 part = seg._replace(start=s0, stop=min(s0 + block, seg.stop))
                 u, v = _driven(u, v, first, part, params, arrivals, n_frames, pop.dims)
     flat = np.flatnonzero(first >= 0)
     order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
-    return (flat[order], first[flat][order]), v.reshape(n_frames, -1)
+    return (flat[order], first[flat][order]), v.reshape(n_frames, -1), first
 
 
 def _charge(
     v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic."""
+    """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic.
+
+    Only neurons that have not fired and end the segment at or above threshold
+    can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
+    step arithmetic runs on those candidates alone.
+    """
     n, b = seg.stop - seg.start, seg.bias
+    if b == 0 and not seg.spiking_on:
+        return np.zeros_like(v), v
+    end = v + n * b
     if seg.spiking_on:
-        idle = np.flatnonzero(first < 0)  # only neurons that have not fired can fire now
+        top = end if b > 0 else np.maximum(v + b, end)
+        idle = np.flatnonzero((top >= params.v_th) & (first < 0))
         w = v[idle]
         if b > 0:
             gap = params.v_th - w
@@ -223,7 +253,7 @@ def _charge(
             k = np.where(w + b >= params.v_th, 1, n + 1)
         hit = k <= n
         first[idle[hit]] = seg.start + k[hit] - 1
-    return np.zeros_like(v), v + n * b
+    return np.zeros_like(v), end
 
 
 def _silent(
@@ -253,6 +283,8 @@ def _silent(
             if last.any():
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
     total, second = total.reshape(u.shape), second.reshape(u.shape)
+    if params.du == 0.0 and s0 == 0:  # the first segment: u = v = 0, skip the zero terms
+        return total, second if b == 0 else second + s1 * b
     if params.du == 0.0:
         return u + total, v + (s1 - s0) * (u + b) + second
     return second, v + (s1 - s0) * b + total

@@ -10,6 +10,14 @@ them in different orders.  Events far enough from every edge (*interior*: no
 tap wraps or leaves the map) take a fast path ``flat(y) = base(x) - Δ(o)`` with
 precomputed flat offsets ``Δ``; the others go through the per-axis rule.  The
 work is ``spikes × taps``, independent of the map size.
+
+When most neurons carry a weighted event (the closed form's arrival features)
+the map is delivered *densely*: the values are scattered onto the source map,
+padded per axis (wrapped, or with the fill value), and every distinct weight
+adds its taps' shifted views, ``I = Σ_w w Σ_{o: K[o] = w} s[· + o]`` — the work
+is ``taps × map`` in a few large array operations.  The same views give
+:meth:`StencilDelivery.weight_not_after`, the weight of the taps whose arrival
+is no later than a per-target step (the closed form's gated neurons).
 """
 
 from __future__ import annotations
@@ -25,6 +33,9 @@ from compiler.snn.projections import StencilProjection
 __all__ = ["StencilDelivery"]
 
 _CHUNK_PAIRS = 1 << 22
+
+#: Weighted events above ``1 / _DENSE_FRACTION`` of the batch's neurons go the dense way.
+_DENSE_FRACTION = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,6 +191,11 @@ class StencilDelivery:
         ``values`` (default 1 per event) scales each event's contribution.
         """
         n_src, n_tgt = self.src_size, prod(self.tgt_dims)
+        if values is not None and events.size * _DENSE_FRACTION >= n_batch * n_src:
+            dtype = np.int64 if self.integer else np.float64
+            dense = np.bincount(events, weights=values, minlength=n_batch * n_src)
+            return self.correlate(k, dense.astype(dtype, copy=False).reshape(
+                n_batch, *self.src_dims))
         b, n = np.divmod(events, n_src)
         inner = self.interior[k][n]
         w = self.tap_weights[k][None, :]
@@ -195,6 +211,111 @@ class StencilDelivery:
         else:  # bincount adds in array order, like add.at, and is several times faster
             out = np.bincount(flat, weights=weights, minlength=n_batch * n_tgt)
         return out.reshape(n_batch, *self.tgt_dims)
+
+    def _shifted(self, k: int, source_map: np.ndarray, fill) -> list[tuple[object, list]]:
+        """Per distinct tap weight, the views ``s[· + o]`` of its taps in the target's layout.
+
+        ``source_map`` is ``(n_batch, *source_shape)``; positions beyond a
+        clipped edge read ``fill``.
+        """
+        tmap = source_map.transpose(0, *(1 + a for a in self.src_axis_of))
+        offsets = self.offsets[k]
+        before = np.maximum(0, -offsets.min(axis=0, initial=0))
+        after = np.maximum(0, offsets.max(axis=0, initial=0))
+        for j, axis in enumerate(self.map_axes):
+            pad = [(0, 0)] * tmap.ndim
+            pad[1 + axis] = (int(before[j]), int(after[j]))
+            tmap = (np.pad(tmap, pad, mode="wrap") if self.wrap[j]
+                    else np.pad(tmap, pad, constant_values=fill))
+        groups: dict[object, list] = {}
+        for w, off in zip(self.tap_weights[k].tolist(), offsets, strict=True):
+            index = [slice(None)] * tmap.ndim
+            for j, axis in enumerate(self.map_axes):
+                start = int(before[j] + off[j])
+                index[1 + axis] = slice(start, start + self.tgt_dims[axis])
+            groups.setdefault(w, []).append(tmap[tuple(index)])
+        return list(groups.items())
+
+    def correlate(self, k: int, source_map: np.ndarray) -> np.ndarray:
+        r"""Dense delivery of a whole value map: ``I[y] = Σ_o K[o] s[y + o]``.
+
+        Parameters
+        ----------
+        k : int
+            Delay class.
+        source_map : ndarray
+            ``(n_batch, *source_shape)`` values (one per source neuron).
+
+        Returns
+        -------
+        ndarray
+            ``(n_batch, *target_shape)``; taps of equal weight are summed first,
+            so float sums may be ordered differently from :meth:`current`'s
+            event-by-event path (equal whenever the sums are exact).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import Population, StencilProjection
+        >>> k = StencilProjection(id="s", source="a", target="b", axes=("r",),
+        ...                       kernel=np.array([1.0, 0.0, 2.0]), edge=("wrap",))
+        >>> a = Population(id="a", shape={"r": 4}, source=True)
+        >>> d = StencilDelivery.build(k, a, Population(id="b", shape={"r": 4}))
+        >>> d.correlate(0, np.array([[1.0, 2.0, 3.0, 4.0]])).tolist()
+        [[8.0, 7.0, 10.0, 5.0]]
+        """
+        out = np.zeros((source_map.shape[0], *self.tgt_dims), source_map.dtype)
+        for w, views in self._shifted(k, source_map, 0):
+            part = views[0].copy()
+            for view in views[1:]:
+                part += view
+            part *= w
+            out += part
+        return out
+
+    def weight_not_after(self, k: int, arrive_map: np.ndarray, when: np.ndarray) -> np.ndarray:
+        r"""Per target ``y``: ``Σ_o K[o] [a(y + o) <= t_y]`` — the weight arrived by ``t_y``.
+
+        Parameters
+        ----------
+        k : int
+            Delay class.
+        arrive_map : ndarray of int64
+            ``(n_batch, *source_shape)`` arrival step of each source neuron's
+            single spike through this class; a step larger than every ``when``
+            (e.g. ``np.iinfo(np.int64).max``) for none.
+        when : ndarray of int64
+            ``(n_batch, *target_shape)`` the step ``t_y`` per target.
+
+        Returns
+        -------
+        ndarray
+            ``(n_batch, *target_shape)`` in the plan's arithmetic: distinct weights
+            times the counts of their taps (exact in int64, and in float64 when the
+            weights are dyadic).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import Population, StencilProjection
+        >>> k = StencilProjection(id="s", source="a", target="b", axes=("r",),
+        ...                       kernel=np.array([-1.0, 0.0, -1.0]), edge=("clip",))
+        >>> a = Population(id="a", shape={"r": 4}, source=True)
+        >>> d = StencilDelivery.build(k, a, Population(id="b", shape={"r": 4}))
+        >>> d.weight_not_after(0, np.array([[0, 5, 2, 9]]), np.array([[3, 3, 3, 3]])).tolist()
+        [[0.0, -2.0, 0.0, -1.0]]
+        """
+        never = np.iinfo(np.int64).max
+        out = np.zeros(when.shape, np.int64 if self.integer else np.float64)
+        count = np.zeros(when.shape, np.int32)
+        hit = np.empty(when.shape, bool)
+        for w, views in self._shifted(k, arrive_map, never):
+            count[...] = 0
+            for view in views:
+                np.less_equal(view, when, out=hit)
+                count += hit
+            out += w * count
+        return out
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (taps landing inside the map)."""

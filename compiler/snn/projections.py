@@ -206,8 +206,9 @@ class MatrixProjection:
             vals = self.weights[r, c]
             dl = self.delays[r, c] if self.delays is not None else np.zeros(r.size, np.int64)
         else:
-            r, c, vals = self.rows, self.cols, self.values
-            dl = self.delays if self.delays is not None else np.zeros(r.size, np.int64)
+            live = self.values != 0  # a stored zero is no synapse, as in the dense form
+            r, c, vals = self.rows[live], self.cols[live], self.values[live]
+            dl = self.delays[live] if self.delays is not None else np.zeros(r.size, np.int64)
         out = {}
         for d in np.unique(dl):
             m = dl == d

@@ -1,0 +1,180 @@
+r"""Closed form of *gated* IF neurons: one excitatory synapse, inhibitory stencils.
+
+A segment ``[s_0, s_1)`` of a fire-once population is *gated* when its neurons
+integrate without leak or bias (``d_u = 1``, ``d_v = 0``, ``b = 0``, input and
+spiking on) and their inputs are
+
+* one :class:`~backends.reference.matrix.MatrixDelivery` of one delay class
+  whose weights are non-negative with at most one non-zero per target column
+  (the *gate*: at most one excitatory synapse per neuron), and
+* any number of :class:`~backends.reference.stencil.StencilDelivery` with
+  non-positive kernels (inhibition),
+
+and every source spikes at most once in the segment.  Then
+
+.. math:: v[t] = v_0 + \sum_{j:\ a_j \le t} w_j
+
+only rises at the gate's arrival ``c`` (all other arrivals are ``<= 0``), so
+with ``v_0 < v_{th}`` a neuron fires at ``c`` iff
+
+.. math:: v_0 + w_{gate} + \sum_{\text{stencils}} \sum_o K[o]\,[a(y + o) \le c] \;\ge\; v_{th}
+
+and never otherwise: one comparison per tap instead of a pass per step.  The
+spiking CFAR's OS neurons (``docs/cfar_spiking.md``) are of this form; the
+cost no longer grows with the number of steps.  The gate's arrival per target
+comes from two deliveries of the gate's spikes (``Σ w`` and ``Σ w a``, one
+term each).  Exactness is the closed form's: identical spike steps in int64,
+and in float64 whenever the sums are exact (dyadic weights).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from backends.reference.matrix import MatrixDelivery
+from backends.reference.neuron import Segment, StepParams
+from backends.reference.plan import SimPlan
+from backends.reference.stencil import StencilDelivery
+
+__all__ = ["GateInputs", "gate_inputs", "solve_gated"]
+
+_NEVER = np.iinfo(np.int64).max
+
+
+@dataclass(frozen=True)
+class GateInputs:
+    """The gate projection and the inhibitory stencils of a gated population."""
+
+    gate: str
+    stencils: tuple[str, ...]
+
+
+def _one_excitatory_per_target(weights) -> bool:
+    if sp.issparse(weights):
+        w = weights.tocsc()
+        return bool((w.data >= 0).all() and (np.diff(w.indptr) <= 1).all())
+    return bool((weights >= 0).all() and ((weights != 0).sum(axis=0) <= 1).all())
+
+
+def gate_inputs(plan: SimPlan, pid: str) -> GateInputs | None:
+    """The gated structure of population ``pid``'s inputs, or None (see the module notes).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from backends.reference import build_plan
+    >>> from compiler.snn import (Encoder, LatencyCode, MatrixProjection, NeuronParams,
+    ...                           Population, SpikingNetwork, StencilProjection)
+    >>> net = SpikingNetwork(name="os", n_steps=8, populations=[
+    ...     Population(id="in", shape={"r": 5}, source=True),
+    ...     Population(id="det", shape={"r": 5},
+    ...                params=NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="fire_once"))],
+    ...   projections=[
+    ...     StencilProjection(id="train", source="in", target="det", axes=("r",),
+    ...                       kernel=np.array([-1.0, 0.0, -1.0]), edge=("clip",)),
+    ...     MatrixProjection(id="cut", source="in", target="det", contract=("r",),
+    ...                      produce=("r",), weights=1.5 * np.eye(5))],
+    ...   encoders=[Encoder(port="x", population="in",
+    ...                     code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))])
+    >>> gate_inputs(build_plan(net), "det")
+    GateInputs(gate='cut', stencils=('train',))
+    """
+    gate, stencils = None, []
+    for qid in plan.incoming[pid]:
+        dl = plan.deliveries[qid]
+        if isinstance(dl, StencilDelivery) and all((w <= 0).all() for w in dl.tap_weights):
+            stencils.append(qid)
+        elif (isinstance(dl, MatrixDelivery) and gate is None and len(dl.delays) == 1
+              and _one_excitatory_per_target(dl.weights[0])):
+            gate = qid
+        else:
+            return None
+    return None if gate is None else GateInputs(gate, tuple(stencils))
+
+
+def is_gated_segment(seg: Segment, params: StepParams) -> bool:
+    """Whether ``seg`` integrates without leak or bias with input and spiking on."""
+    return (seg.input_on and seg.spiking_on and params.du == 1.0 and params.dv == 0.0
+            and seg.bias == 0)
+
+
+def _single(flat: np.ndarray, n: int) -> bool:
+    return not flat.size or int(np.bincount(flat, minlength=n).max()) <= 1
+
+
+def solve_gated(
+    plan: SimPlan, pid: str, gates: GateInputs, seg: Segment, params: StepParams,
+    v: np.ndarray, first: np.ndarray, spikes: dict, n_frames: int, need_u: bool
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Solve one gated segment; None when a run-time condition fails (use another path).
+
+    Parameters
+    ----------
+    plan, pid : the plan and the population.
+    gates : GateInputs
+        From :func:`gate_inputs`.
+    seg, params : the segment and the population's constants.
+    v, first : ndarray
+        Membrane at the segment start and first spike steps (``-1`` none), flat
+        over ``(frames, neurons)``; ``first`` is updated in place.
+    spikes : dict
+        ``(flat, step)`` of every source population solved so far.
+    n_frames : int
+    need_u : bool
+        Whether a later segment reads the end current.
+
+    Returns
+    -------
+    (u, v) at the segment end, or None (nothing changed).
+    """
+    s0, s1 = seg.start, seg.stop
+    idle = first < 0
+    if (v[idle] >= params.v_th).any():
+        return None
+    pop = plan.populations[pid]
+    shape = (n_frames, *pop.dims)
+    dtype = v.dtype
+    # the gate: per target, its weight (0 = no spike in the segment) and its arrival step
+    dl = plan.deliveries[gates.gate]
+    flat, step = spikes[dl.source]
+    arrive = step + dl.delays[0]
+    keep = (arrive >= s0) & (arrive < s1)
+    flat, arrive = flat[keep], arrive[keep]
+    if not _single(flat, n_frames * dl.src_size):
+        return None
+    w_gate = dl.current(0, flat, n_frames, values=np.ones(flat.size, dtype)).reshape(-1)
+    w_arrive = dl.current(0, flat, n_frames, values=arrive.astype(dtype)).reshape(-1)
+    open_ = w_gate > 0
+    when = np.full(w_gate.size, -1, np.int64)
+    when[open_] = np.rint(w_arrive[open_] / w_gate[open_]).astype(np.int64)
+    when = when.reshape(shape)
+    v_at = v + w_gate
+    total = v + w_gate
+    u_end = np.zeros_like(v)
+    if need_u:
+        last = arrive == s1 - 1
+        u_end += dl.current(0, flat[last], n_frames).reshape(-1)
+    for qid in gates.stencils:
+        st = plan.deliveries[qid]
+        flat_s, step_s = spikes[st.source]
+        n_src = n_frames * st.src_size
+        for k, d in enumerate(st.delays):
+            arr = step_s + d
+            keep = (arr >= s0) & (arr < s1)
+            f, a = flat_s[keep], arr[keep]
+            if not _single(f, n_src):
+                return None
+            arrive_map = np.full(n_src, _NEVER, np.int64)
+            arrive_map[f] = a
+            arrive_map = arrive_map.reshape(n_frames, *st.src_dims)
+            v_at = v_at + st.weight_not_after(k, arrive_map, when).reshape(-1)
+            total = total + st.correlate(k, (arrive_map != _NEVER).astype(dtype)).reshape(-1)
+            if need_u:
+                last = a == s1 - 1
+                u_end += st.current(k, f[last], n_frames).reshape(-1)
+    fire = idle & open_ & (v_at >= params.v_th)
+    first[fire] = when.reshape(-1)[fire]
+    return u_end, total
