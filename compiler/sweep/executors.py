@@ -52,6 +52,10 @@ class SyncExecutor:
         """Nothing to release."""
 
 
+#: glibc's trim threshold for the LocalCluster's worker processes (bytes).
+_MALLOC_TRIM_THRESHOLD = 1 << 30
+
+
 class DaskExecutor:
     """A Dask client: of a new LocalCluster (``scheduler=None``) or of a running scheduler."""
 
@@ -60,8 +64,16 @@ class DaskExecutor:
 
         self.cluster = None
         if scheduler is None:
-            self.cluster = LocalCluster(n_workers=workers or 2, threads_per_worker=1,
-                                        processes=processes, dashboard_address=":0")
+            import dask
+
+            # distributed's default (64 kB) makes glibc hand every freed large array back to
+            # the OS, so each simulation step page-faults its buffers afresh: ~30 % of a
+            # sweep's time went to the kernel (benchmarks/sweep_fig7.py)
+            trim = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_":
+                    _MALLOC_TRIM_THRESHOLD}
+            with dask.config.set(trim):
+                self.cluster = LocalCluster(n_workers=workers or 2, threads_per_worker=1,
+                                            processes=processes, dashboard_address=":0")
             self.client = Client(self.cluster)
         else:
             self.client = Client(scheduler)
