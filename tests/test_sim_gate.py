@@ -95,7 +95,7 @@ def _check(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     step = simulate(net, inputs, mode="step", arithmetic=arithmetic, record_spikes=True,
                     out_of_range="clip")
     with monkeypatch.context() as m:
-        m.setattr(closed, "_driven", _no_driven)
+        m.setattr(closed, "driven", _no_driven)
         fast = simulate(net, inputs, mode="closed", arithmetic=arithmetic, record_spikes=True,
                         out_of_range="clip")
     for port in step.outputs:

@@ -1,0 +1,161 @@
+r"""The closed form's segment solvers: one phase segment of one population, no step loop.
+
+With arrival steps ``a_j = t_j + d_j`` of the synapses ``w_j`` and a segment
+``[s_0, s_1)`` of ``L`` steps and bias ``b``:
+
+*Silent* (input on, spiking off, ``d_v = 0``, ``d_u ∈ {0, 1}``) — no time loop:
+
+.. math::
+
+    d_u = 0:\quad u_1 &= u_0 + \textstyle\sum_j w_j, \qquad
+    v_1 = v_0 + L\,(u_0 + b) + \textstyle\sum_j w_j\,(s_1 - a_j)\\
+    d_u = 1:\quad u_1 &= I[s_1 - 1], \qquad v_1 = v_0 + L\,b + \textstyle\sum_j w_j
+
+(sums over arrivals in the segment): event-driven (or dense) matrix products
+per projection and delay.
+
+*Charging* (input off, ``d_v = 0``): ``u = 0`` and ``v_0 + k\,b`` first reaches
+``v_th`` at ``k = \lceil (v_{th} - v_0)/b \rceil`` (checked at ``k-1`` and ``k``).
+
+*Driven* (anything else): the drive histogram ``D[t] = Σ_j w_j [a_j = t]`` of
+the segment is one delivery over a ``(steps × frames)`` batch — the very
+arithmetic of the step engine — and the recurrences run with the step engine's
+operation order: ``np.cumsum`` (sequential) for ``d_u ∈ {0, 1}, d_v = 0``, else
+:func:`~backends.reference.neuron.neuron_step` over the segment.  The caller
+cuts long segments into blocks so the histogram stays bounded.
+
+Each solver takes the state at the segment start (``u``, ``v`` flat over
+``(frames, neurons)``; ``first`` the first spike steps, ``-1`` none, updated in
+place) and returns ``(u, v)`` at its end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from backends.reference.delivery import Delivery
+from backends.reference.neuron import NeuronState, Segment, StepParams, neuron_step
+
+__all__ = ["Arrivals", "charge", "silent", "driven"]
+
+
+@dataclass(frozen=True)
+class Arrivals:
+    """Spikes of one source through one delay class, sorted by arrival step."""
+
+    delivery: Delivery
+    k: int
+    flat: np.ndarray
+    arrive: np.ndarray
+
+    def within(self, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+        """The spikes arriving in ``[start, stop)``: ``(flat, arrival step)``."""
+        lo, hi = np.searchsorted(self.arrive, (start, stop))
+        return self.flat[lo:hi], self.arrive[lo:hi]
+
+
+def charge(
+    v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic.
+
+    Only neurons that have not fired and end the segment at or above threshold
+    can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
+    step arithmetic runs on those candidates alone.
+    """
+    n, b = seg.stop - seg.start, seg.bias
+    if b == 0 and not seg.spiking_on:
+        return np.zeros_like(v), v
+    end = v + n * b
+    if seg.spiking_on:
+        top = end if b > 0 else np.maximum(v + b, end)
+        idle = np.flatnonzero((top >= params.v_th) & (first < 0))
+        w = v[idle]
+        if b > 0:
+            gap = params.v_th - w
+            k = -((-gap) // b) if params.integer else np.ceil(gap / b)
+            k = np.clip(k, 1, n + 1).astype(np.int64)
+            k = np.where((k > 1) & (w + (k - 1) * b >= params.v_th), k - 1, k)
+            k = np.where(w + k * b < params.v_th, k + 1, k)
+        else:
+            k = np.where(w + b >= params.v_th, 1, n + 1)
+        hit = k <= n
+        first[idle[hit]] = seg.start + k[hit] - 1
+    return np.zeros_like(v), end
+
+
+def silent(
+    u: np.ndarray, v: np.ndarray, seg: Segment, params: StepParams, arrivals: list,
+    n_frames: int, dims: tuple[int, ...], need_u: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """Input on, spiking off, ``dv = 0``, ``du ∈ {0, 1}``: end state from arrival features.
+
+    With ``du = 0`` and ``need_u`` False the end current (``u + Σ w``) is not
+    computed: no later segment reads it (the caller checked), saving one product.
+    """
+    s0, s1, b = seg.start, seg.stop, seg.bias
+    total = np.zeros((n_frames, *dims), u.dtype)
+    second = np.zeros_like(total)
+    for arr in arrivals:
+        flat, arrive = arr.within(s0, s1)
+        if not flat.size:
+            continue
+        # unit weights route the silent stage's bulk delivery through the BLAS path (event
+        # order is immaterial here: the silent path is exact only where every sum is exact)
+        if need_u or params.du != 0.0:
+            total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
+        if params.du == 0.0:
+            second += arr.delivery.current(arr.k, flat, n_frames, values=s1 - arrive)
+        else:
+            last = arrive == s1 - 1
+            if last.any():
+                second += arr.delivery.current(arr.k, flat[last], n_frames)
+    total, second = total.reshape(u.shape), second.reshape(u.shape)
+    if params.du == 0.0 and s0 == 0:  # the first segment: u = v = 0, skip the zero terms
+        return total, second if b == 0 else second + s1 * b
+    if params.du == 0.0:
+        return u + total, v + (s1 - s0) * (u + b) + second
+    return second, v + (s1 - s0) * b + total
+
+
+def driven(
+    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams,
+    arrivals: list, n_frames: int, dims: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Any segment: drive histogram by delivery, then the step engine's recurrences."""
+    s0, n_t = seg.start, seg.stop - seg.start
+    if not seg.input_on:
+        return _recur(u, v, first, seg, params, None)
+    drive = np.zeros((n_t * n_frames, *dims), u.dtype)
+    for arr in arrivals:
+        flat, arrive = arr.within(s0, seg.stop)
+        if not flat.size:
+            continue
+        src_size = arr.delivery.src_size
+        f, i = np.divmod(flat, src_size)
+        batch = np.sort(((arrive - s0) * n_frames + f) * src_size + i)
+        drive += arr.delivery.current(arr.k, batch, n_t * n_frames)
+    drive = drive.reshape(n_t, -1)
+    if params.dv == 0.0 and params.du in (0.0, 1.0):
+        cur = np.cumsum(np.vstack([u[None], drive]), axis=0)[1:] if params.du == 0.0 else drive
+        vs = np.cumsum(np.vstack([v[None], cur + seg.bias]), axis=0)[1:]
+        if seg.spiking_on:
+            cross = vs >= params.v_th
+            hit = cross.any(axis=0) & (first < 0)
+            first[hit] = s0 + cross.argmax(axis=0)[hit]
+        return cur[-1].copy(), vs[-1].copy()
+    return _recur(u, v, first, seg, params, drive)
+
+
+def _recur(
+    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams,
+    drive: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The step engine's own update over the segment (general decays)."""
+    state = NeuronState(u, v, first >= 0)
+    for i, t in enumerate(range(seg.start, seg.stop)):
+        fired, state = neuron_step(state, 0 if drive is None else drive[i], params, t)
+        first[fired] = t
+    return state.u, state.v
