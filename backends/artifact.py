@@ -59,10 +59,8 @@ Examples
 
 from __future__ import annotations
 
-import json
 import operator
 from collections.abc import Mapping
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from types import MappingProxyType
 
@@ -73,7 +71,6 @@ from backends.artifact_codec import network_from_manifest, population_entry, pro
 from backends.artifact_io import (
     ARRAYS_FILE,
     MANIFEST_FILE,
-    canonical_json,
     finite_json,
     npz_bytes,
     plain_json,
@@ -83,6 +80,7 @@ from backends.artifact_io import (
     sha256_hex,
     write_atomic,
 )
+from backends.manifest import radarsnn_version, read_manifest_file, seal
 from compiler.snn import (
     MatrixProjection,
     SpikingNetwork,
@@ -108,17 +106,7 @@ PROJECTION_KINDS: Mapping[str, type] = MappingProxyType(
     {"matrix": MatrixProjection, "stencil": StencilProjection}
 )
 
-_HASH_KEY = "manifest_sha256"
-
-
-def _radarsnn_version() -> str:
-    try:
-        return version("radarsnn")
-    except PackageNotFoundError:
-        return "0+unknown"
-
-
-
+_radarsnn_version = radarsnn_version  # TEMP: backends/emit imports it until it is switched
 
 def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | None = None,
          kinds: Mapping[str, type] = PROJECTION_KINDS) -> Path:
@@ -178,7 +166,7 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
     body = {
         "format": ARTIFACT_FORMAT,
         "format_version": ARTIFACT_VERSION,
-        "radarsnn_version": _radarsnn_version(),
+        "radarsnn_version": radarsnn_version(),
         "network": {"name": plain_json(network.name, "network name"),
                     "n_steps": operator.index(network.n_steps),
                     "meta": plain_json(network.meta, "network meta")},
@@ -189,7 +177,7 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
         "extra": plain_json(dict(extra or {}), "extra"),
         "arrays": {"file": ARRAYS_FILE, "sha256": sha256_hex(npz), "n_bytes": len(npz)},
     }
-    manifest = {**body, _HASH_KEY: sha256_hex(canonical_json(body))}
+    manifest = seal(body)
     folder = Path(directory)
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -199,25 +187,6 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
         raise ArtifactError(f"cannot write the artifact to {folder}: {exc}") from exc
     return folder
 
-
-
-def _check_version(manifest: dict, path: Path) -> None:
-    found = manifest.get("format")
-    if found != ARTIFACT_FORMAT:
-        raise ArtifactError(f"{path}: format is {found!r}, expected {ARTIFACT_FORMAT!r}; not a "
-                            "radarsnn spiking-network artifact")
-    text = manifest.get("format_version")
-    parts = text.split(".") if isinstance(text, str) else []
-    if len(parts) != 2 or not all(p.isdigit() for p in parts):
-        raise ArtifactError(f"{path}: format_version {text!r} is not MAJOR.MINOR")
-    major, ours = int(parts[0]), int(ARTIFACT_VERSION.split(".")[0])
-    if major > ours:
-        raise ArtifactError(
-            f"{path}: written by radarsnn {manifest.get('radarsnn_version')}, format {text}; "
-            f"this radarsnn ({_radarsnn_version()}) reads {ours}.x: upgrade radarsnn")
-    if major < ours:
-        raise ArtifactError(f"{path}: format {text} is older than {ours}.x and cannot be read; "
-                            "re-emit the artifact with this radarsnn")
 
 
 def read_manifest(directory: str | Path) -> dict:
@@ -247,29 +216,10 @@ def read_manifest(directory: str | Path) -> dict:
     Traceback (most recent call last):
     ir.errors.ArtifactError: .../manifest.json: cannot read (No such file or directory); ...
     """
-    path = Path(directory) / MANIFEST_FILE
-    raw = read_bytes(path)
-    try:
-        manifest = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ArtifactError(f"{path}: not valid UTF-8 JSON ({exc})") from exc
-    if not isinstance(manifest, dict):
-        raise ArtifactError(f"{path}: the top level is a {type(manifest).__name__}, not an object")
-    _check_version(manifest, path)
-    try:
-        canonical = render_json(manifest) == raw
-    except ValueError:  # NaN/Infinity tokens: not strict JSON
-        canonical = False
-    if not canonical:
-        raise ArtifactError(f"{path}: not in the canonical form save() writes (edited by hand?); "
-                            "re-emit the artifact")
-    body = {k: v for k, v in manifest.items() if k != _HASH_KEY}
-    digest = sha256_hex(canonical_json(body))
-    if manifest.get(_HASH_KEY) != digest:
-        raise ArtifactError(f"{path}: content digest mismatch (stored "
-                            f"{manifest.get(_HASH_KEY)!r}, computed {digest!r}); the manifest "
-                            "was modified after it was written")
-    return manifest
+    return read_manifest_file(Path(directory) / MANIFEST_FILE, fmt=ARTIFACT_FORMAT,
+                              current=ARTIFACT_VERSION,
+                              what="radarsnn spiking-network artifact",
+                              redo="re-emit the artifact")
 
 
 def _read_arrays(path: Path, manifest: dict) -> dict[str, np.ndarray]:

@@ -37,9 +37,10 @@ import json
 from collections.abc import Mapping
 from pathlib import Path
 
-from backends.artifact import _radarsnn_version, load, read_manifest, save
-from backends.artifact_io import canonical_json, plain_json, read_bytes, render_json, sha256_hex
+from backends.artifact import load, read_manifest, save
+from backends.artifact_io import plain_json, render_json
 from backends.artifact_io import write_atomic as _write
+from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, seal
 from compiler.program import CompiledProgram, Segment
 from ir import Graph
 from ir.errors import ArtifactError, RadarSNNError
@@ -53,7 +54,6 @@ PROGRAM_FILE = "program.json"
 PROGRAM_FORMAT = "radarsnn.program"
 #: ``MAJOR.MINOR`` of the program format this module writes (and the major it reads).
 PROGRAM_VERSION = "1.0"
-_HASH_KEY = "manifest_sha256"
 
 
 def is_program(directory: str | Path) -> bool:
@@ -115,14 +115,14 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
     for seg in program.segments:
         if seg.kind == "spiking":
             net_dir = save(seg.network, folder / "networks" / str(len(digests)))
-            digests.append(read_manifest(net_dir)[_HASH_KEY])
+            digests.append(read_manifest(net_dir)[HASH_KEY])
         segments.append(_segment_entry(seg, digests))
     report = program.records.get("report")
     target = program.target
     body = {
         "format": PROGRAM_FORMAT,
         "format_version": PROGRAM_VERSION,
-        "radarsnn_version": _radarsnn_version(),
+        "radarsnn_version": radarsnn_version(),
         # as JSON text: the manifest's keys are sorted, and a tensor's axes are ordered
         "graph": json.dumps(plain_json(program.graph.to_dict(), "graph"), ensure_ascii=True),
         "segments": segments,
@@ -132,7 +132,7 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
         "report": None if report is None else report.to_json(indent=None),
         "extra": plain_json(dict(extra or {}), "extra"),
     }
-    manifest = {**body, _HASH_KEY: sha256_hex(canonical_json(body))}
+    manifest = seal(body)
     try:
         _write(folder / PROGRAM_FILE, render_json(manifest))
         if report is not None:
@@ -149,29 +149,9 @@ def _jsonable(options: Mapping) -> dict:
 
 def read_program_manifest(directory: str | Path) -> dict:
     """The checked ``program.json`` of a program artifact (format, version, canonical, digest)."""
-    path = Path(directory) / PROGRAM_FILE
-    raw = read_bytes(path)
-    try:
-        manifest = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ArtifactError(f"{path}: not valid UTF-8 JSON ({exc})") from exc
-    if not isinstance(manifest, dict) or manifest.get("format") != PROGRAM_FORMAT:
-        raise ArtifactError(f"{path}: not a radarsnn program manifest (format "
-                            f"{manifest.get('format') if isinstance(manifest, dict) else None!r})")
-    version = str(manifest.get("format_version", ""))
-    if version.split(".")[0] != PROGRAM_VERSION.split(".")[0]:
-        raise ArtifactError(f"{path}: program format {version!r}, this radarsnn "
-                            f"({_radarsnn_version()}) reads {PROGRAM_VERSION.split('.')[0]}.x; "
-                            "re-compile the chain with this radarsnn")
-    try:
-        canonical = render_json(manifest) == raw
-    except ValueError:
-        canonical = False
-    body = {k: v for k, v in manifest.items() if k != _HASH_KEY}
-    if not canonical or manifest.get(_HASH_KEY) != sha256_hex(canonical_json(body)):
-        raise ArtifactError(f"{path}: modified after it was written (not canonical or digest "
-                            "mismatch); re-compile the chain")
-    return manifest
+    return read_manifest_file(Path(directory) / PROGRAM_FILE, fmt=PROGRAM_FORMAT,
+                              current=PROGRAM_VERSION, what="radarsnn program artifact",
+                              redo="re-compile the chain")
 
 
 def load_program(directory: str | Path) -> CompiledProgram:
@@ -208,7 +188,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
                 if net_dir.resolve().parent != (folder / "networks").resolve():
                     raise ArtifactError(f"{path}: network path {ref['path']!r} leaves the "
                                         "artifact's networks/ folder")
-                if read_manifest(net_dir)[_HASH_KEY] != ref["manifest_sha256"]:
+                if read_manifest(net_dir)[HASH_KEY] != ref["manifest_sha256"]:
                     raise ArtifactError(f"{net_dir}: not the network this program was saved "
                                         "with (digest differs); re-compile the chain")
                 segments.append(Segment(kind="spiking", inputs=list(entry["inputs"]),
