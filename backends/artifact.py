@@ -106,8 +106,6 @@ PROJECTION_KINDS: Mapping[str, type] = MappingProxyType(
     {"matrix": MatrixProjection, "stencil": StencilProjection}
 )
 
-_radarsnn_version = radarsnn_version  # TEMP: backends/emit imports it until it is switched
-
 def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | None = None,
          kinds: Mapping[str, type] = PROJECTION_KINDS) -> Path:
     """Write ``network`` as an artifact directory (created if needed; its two files replaced).

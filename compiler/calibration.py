@@ -30,6 +30,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
@@ -37,7 +38,7 @@ import numpy as np
 
 from ir.errors import CompileError
 
-__all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy",
+__all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy", "SYNTHETIC",
            "synthetic_inputs"]
 
 #: Number of quantiles kept per node (0 %, 1/256, …, 100 %).
@@ -210,32 +211,90 @@ def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = 
                            axis_quantiles=profiles[1])
 
 
-def synthetic_inputs(graph, *, seed: int = 0) -> dict[str, np.ndarray]:
-    """Seeded unit-variance Gaussian noise for every input node of ``graph``.
+def _amplitude(rng: np.random.Generator, shape: tuple[int, ...], cplx: bool) -> np.ndarray:
+    """Unit-variance Gaussian noise (complex: circular, unit total variance)."""
+    x = rng.standard_normal(shape)
+    return (x + 1j * rng.standard_normal(shape)) / np.sqrt(2.0) if cplx else x
+
+
+def _power(rng: np.random.Generator, shape: tuple[int, ...], cplx: bool) -> np.ndarray:
+    """``|z|²`` of unit complex Gaussian noise: exponential with mean 1, never negative."""
+    return rng.standard_exponential(shape)
+
+
+def _db(rng: np.random.Generator, shape: tuple[int, ...], cplx: bool) -> np.ndarray:
+    """That power in decibels, ``10·log10(p)`` (floored at -300 dB)."""
+    return 10.0 * np.log10(np.maximum(_power(rng, shape, cplx), 1e-30))
+
+
+def _mask(rng: np.random.Generator, shape: tuple[int, ...], cplx: bool) -> np.ndarray:
+    """Fair coin flips."""
+    return rng.random(shape) < 0.5
+
+
+#: Noise generators by input domain: ``draw(rng, shape, complex) -> ndarray``.
+SYNTHETIC: dict[str, Callable[[np.random.Generator, tuple[int, ...], bool], np.ndarray]] = {
+    "amplitude": _amplitude, "power": _power, "db": _db, "mask": _mask}
+
+
+def synthetic_inputs(graph, *, seed: int = 0,
+                     generators: Mapping[str, Callable[..., np.ndarray]] = SYNTHETIC
+                     ) -> dict[str, np.ndarray]:
+    r"""Seeded noise for every input node of ``graph``, drawn in the input's domain.
 
     A stand-in calibration set for when only the *cost* of a chain matters
-    (``radarsnn report`` without ``--calibration``): every neuron, synapse, step
-    and core count is independent of the values, but thresholds calibrated on
-    noise say nothing about accuracy on radar data.
+    (``radarsnn compile/report/emit`` without ``--calibration``): every neuron,
+    synapse, step and core count is independent of the values, but thresholds
+    calibrated on noise say nothing about accuracy on radar data.  Per domain
+    (:data:`SYNTHETIC`):
+
+    ==========  ===============================================================
+    amplitude   :math:`x \sim \mathcal N(0, 1)`; complex :math:`(a + ib)/\sqrt2`
+    power       :math:`p = |z|^2 \sim \mathrm{Exp}(1)` (unit complex Gaussian noise)
+    db          :math:`10 \log_{10} p` (mean ≈ -2.5 dB, standard deviation ≈ 5.6 dB)
+    mask        :math:`\mathrm{Bernoulli}(1/2)` booleans
+    ==========  ===============================================================
+
+    Parameters
+    ----------
+    graph : ir.Graph
+        The chain.
+    seed : int
+        Seed of ``numpy.random.default_rng``.
+    generators : mapping of domain to callable
+        ``draw(rng, shape, complex) -> ndarray`` per domain (default :data:`SYNTHETIC`).
+
+    Returns
+    -------
+    dict of str to ndarray
+        One array per input node id, of its declared shape (no frames axis).
+
+    Raises
+    ------
+    CompileError
+        For an input whose domain has no generator (naming the node and the
+        domain, and suggesting ``--calibration``).
 
     Examples
     --------
     >>> from ir import Graph
     >>> g = Graph.from_dict({"name": "x", "nodes": [
     ...     {"id": "adc", "op": "adc_input", "shape": {"chirp": 2, "sample": 4}, "complex": True},
-    ...     {"id": "o", "op": "output", "input": "adc"}]})
-    >>> x = synthetic_inputs(g)["adc"]
-    >>> x.shape, x.dtype
-    ((2, 4), dtype('complex128'))
+    ...     {"id": "rd", "op": "input", "shape": {"range": 3}, "domain": "power"},
+    ...     {"id": "o", "op": "output", "input": "adc"},
+    ...     {"id": "p", "op": "output", "input": "rd"}]})
+    >>> x = synthetic_inputs(g)
+    >>> x["adc"].shape, x["adc"].dtype, bool((x["rd"] >= 0).all())
+    ((2, 4), dtype('complex128'), True)
     """
     rng = np.random.default_rng(seed)
     types = graph.infer_types()
     out = {}
     for node in graph.input_ids():
         t = types[node]
-        shape = tuple(t.axes.values())
-        x = rng.standard_normal(shape)
-        if t.complex:
-            x = (x + 1j * rng.standard_normal(shape)) / np.sqrt(2.0)
-        out[node] = x
+        if t.domain not in generators:
+            raise CompileError(f"input {node!r}: no synthetic calibration for domain "
+                               f"{t.domain!r} (known: {sorted(generators)}); pass calibration "
+                               "inputs (--calibration NODE=X.npy)", node=node)
+        out[node] = generators[t.domain](rng, tuple(t.axes.values()), bool(t.complex))
     return out

@@ -195,8 +195,9 @@ def test_closed_equals_step_on_a_compiled_cfar():
                   "edge": ["clip", "wrap"], **extra}
         g = _graph({"range": 16, "doppler": 12}, params)
         net = _lower(g, cfar_range=(0.01, 8.0), time_steps=64).networks[0]
-        a = simulate(net, {"x": x}, mode="step").outputs["det"]
-        b = simulate(net, {"x": x}, mode="closed").outputs["det"]
+        # the code's top is 8 on purpose: both engines clip the few larger cells alike
+        a = simulate(net, {"x": x}, mode="step", out_of_range="clip").outputs["det"]
+        b = simulate(net, {"x": x}, mode="closed", out_of_range="clip").outputs["det"]
         np.testing.assert_array_equal(a, b)
 
 
@@ -225,7 +226,8 @@ def test_step_accuracy_on_db_maps(study_maps, kind, need, quantiles):
     options = {"time_steps": 100, **({"cfar_quantiles": quantiles} if quantiles else {})}
     net = run_pipeline([Verify(), Lower()], CompileContext(options=options), program).networks[0]
     assert net.n_steps == 100
-    spiking = simulate(net, {"rd": test}, mode="step").outputs["det"] > 0
+    # calibrated on other maps (and the 99 % top on purpose): the code clips what is above
+    spiking = simulate(net, {"rd": test}, mode="step", out_of_range="clip").outputs["det"] > 0
     ref = np.array([cfar(m, kind=kind, guard=[3, 3], train=[4, 4], alpha=ALPHA[kind]["db"],
                          k=132 if kind == "os" else None, edge=["clip", "wrap"]) for m in test])
     sens, prec = score(ref, spiking)

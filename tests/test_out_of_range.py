@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 from backends import save
 from backends.reference import run_program, simulate
+from backends.reference.encoding import encode_inputs
 from backends.reference.input_range import OutOfRangeWarning, out_of_range
 from compiler.cli import main
 from compiler.compile import compile_graph
@@ -87,18 +88,55 @@ def test_reject_names_port_count_index_value_and_range():
         assert part in message, message
 
 
-def test_warn_is_the_default_and_clip_is_silent_but_counted():
+def test_reject_is_the_default_warn_and_clip_on_request_are_counted():
     net = _net(LINEAR)
     x = np.array([0.5, 3.0, 0.25])
+    with pytest.raises(SimulationError, match=r"1 of 3 values .* first at index \(1,\) "
+                                              r"\(value 3\)"):
+        simulate(net, {"x": x})
+    with pytest.raises(SimulationError, match="input 'x'"):
+        encode_inputs(net, {"x": x})
     with pytest.warns(OutOfRangeWarning, match="1 of 3 values"):
-        warned = simulate(net, {"x": x})
+        warned = simulate(net, {"x": x}, out_of_range="warn")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         clipped = simulate(net, {"x": x}, out_of_range="clip")
-    inside = simulate(net, {"x": np.clip(x, 0.0, 1.0)}, out_of_range="reject")
+    inside = simulate(net, {"x": np.clip(x, 0.0, 1.0)})
     assert warned.clipped == clipped.clipped == {"x": 1} and inside.clipped == {}
     np.testing.assert_array_equal(clipped.outputs["y"], inside.outputs["y"])
     assert "input x: 1 values outside the encoder's range, clipped" in clipped.summary()
+
+
+def test_the_error_names_what_the_range_applies_to_and_the_ways_out():
+    with pytest.raises(SimulationError) as info:
+        simulate(_net(LINEAR, split="signed"), {"x": np.array([0.5, -3.0, 0.25])})
+    message = str(info.value)
+    for part in ("[0, 1] (per sign: |x|)", "value -3", "headroom", "out_of_range='clip'",
+                 "--clip"):
+        assert part in message, message
+
+
+def _two_ports() -> SpikingNetwork:
+    """Ports ``x`` and ``z`` (both LINEAR) into one neuron."""
+    src = [Population(id=p, shape={"i": 2}, source=True) for p in ("a", "c")]
+    return SpikingNetwork(
+        name="two", n_steps=10,
+        populations=[*src, Population(id="b", shape={"o": 1},
+                                      params=NeuronParams(du=0.0, v_th=1.0, reset="fire_once"))],
+        projections=[MatrixProjection(id=f"w{p}", source=p, target="b", contract=("i",),
+                                      produce=("o",), weights=np.ones((2, 1))) for p in "ac"],
+        encoders=[Encoder(port="x", population="a", code=LINEAR),
+                  Encoder(port="z", population="c", code=LINEAR)],
+        decoders=[Decoder(port="y", population="b", kind="spike_time", t_ref=10.0)])
+
+
+def test_a_mapping_sets_the_policy_per_port_and_ports_left_out_reject():
+    net, big, fine = _two_ports(), np.array([2.0, 0.5]), np.array([0.5, 0.5])
+    assert simulate(net, {"x": big, "z": fine}, out_of_range={"x": "clip"}).clipped == {"x": 1}
+    with pytest.raises(SimulationError, match="input 'z': 1 of 2 values"):
+        simulate(net, {"x": big, "z": big}, out_of_range={"x": "clip"})
+    both = simulate(net, {"x": big, "z": big}, out_of_range={"x": "clip", "z": "clip"})
+    assert both.clipped == {"x": 1, "z": 1}
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
@@ -129,6 +167,10 @@ def test_run_program_applies_the_policy_to_the_callers_values():
     assert run_program(program, {"a": x}, out_of_range="reject").clipped == {}
     with pytest.raises(SimulationError, match="input 'a'"):
         run_program(program, {"a": x * 10}, out_of_range="reject")
+    with pytest.raises(SimulationError, match="input 'a'"):  # the default
+        run_program(program, {"a": x * 10})
+    with pytest.raises(SimulationError, match="input 'a'"):  # simulate on a program
+        simulate(program, {"a": x * 10})
     assert run_program(program, {"a": x * 10}, out_of_range="clip").clipped["a"] > 0
     with pytest.raises(IRError, match="non-finite"):
         run_program(program, {"a": np.full(8, np.inf)}, out_of_range="clip")
@@ -140,7 +182,7 @@ def test_cli_run_rejects_by_default_and_clips_with_the_flag(tmp_path, capsys):
     np.save(tmp_path / "big.npy", x * 10)
     assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "big.npy")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("error: input 'a'") and "--clip" not in err[0]
+    assert len(err) == 1 and err[0].startswith("error: input 'a'") and "--clip" in err[0]
     assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "big.npy"), "--clip",
                  "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["clipped"]["a"] > 0

@@ -55,7 +55,9 @@ def test_ti_chirps_leave_one_out_find_the_annotated_reflections(ti, i):
     chirps, graph = ti
     others = np.delete(chirps, i, axis=0)  # calibrated without the chirp under test
     program = compile_graph(graph, "loihi2", calibration_inputs={"chirp": others})
-    spiking = np.flatnonzero(run_program(program, {"chirp": chirps[i]}).outputs["out"])
+    # chirp 0 is stronger than the other three (a third of its samples exceed their range)
+    result = run_program(program, {"chirp": chirps[i]}, out_of_range="clip")
+    spiking = np.flatnonzero(result.outputs["out"])
     conventional = np.flatnonzero(evaluate(graph, {"chirp": chirps[i]})["out"])
     required = [b for b in ANNOTATED[i] if _near(b, conventional)]
     assert required or i == 1  # chirp 1's weak far target is below the conventional CFAR too

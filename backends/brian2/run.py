@@ -22,6 +22,7 @@ import numpy as np
 from backends.brian2.build import Brian2Model, build_model
 from backends.reference.decoding import check_decoders, decode_outputs
 from backends.reference.encoding import encode_inputs
+from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.result import Activity, SimResult
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
@@ -93,6 +94,7 @@ def simulate_brian2(
     *,
     target: str = "numpy",
     record_spikes: bool = False,
+    out_of_range: str | Mapping[str, str] = DEFAULT_POLICY,
     b2: Any = None,
 ) -> SimResult:
     """Simulate ``network`` on ``inputs`` in Brian2; the result reads like the reference's.
@@ -107,6 +109,9 @@ def simulate_brian2(
         Brian2's code-generation target (``numpy`` needs no C compiler).
     record_spikes : bool
         Return full spike rasters in :attr:`SimResult.spikes`.
+    out_of_range : {"reject", "warn", "clip"} or mapping of port to it
+        As for :func:`backends.reference.simulate` (refuse by default; clipped
+        values are counted in :attr:`SimResult.clipped`).
     b2 : module, optional
         The ``brian2`` module (imported by default).
 
@@ -136,7 +141,9 @@ def simulate_brian2(
     b2 = b2 if b2 is not None else import_brian2()
     network.validate()
     check_decoders(network)
-    trains, n_frames, framed = encode_inputs(network, inputs)
+    clipped: dict[str, int] = {}
+    trains, n_frames, framed = encode_inputs(network, inputs, out_of_range=out_of_range,
+                                             clipped=clipped)
     saved = b2.prefs.codegen.target
     b2.prefs.codegen.target = target
     try:
@@ -155,4 +162,4 @@ def simulate_brian2(
             pid: r.reshape(n_frames, network.n_steps, *network.population[pid].dims)
             for pid, r in act.rasters.items()},
         mode=f"brian2-{target}", arithmetic="float64",
-        n_steps=network.n_steps, n_frames=n_frames)
+        n_steps=network.n_steps, n_frames=n_frames, clipped=clipped)

@@ -100,7 +100,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
                    help="directory that receives the package folder")
     p.add_argument("--name", help="package name (default: snn_<chain>)")
     p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
-                   help="calibration input per input node (default: synthetic noise)")
+                   help="calibration input per input node (default: seeded synthetic noise "
+                        "in each input's domain)")
     p.add_argument("--time-steps", type=int, help="override the per-motif time window")
     p.set_defaults(func=_cmd_emit)
     return p

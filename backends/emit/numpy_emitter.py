@@ -2,9 +2,11 @@ r"""``emit_numpy``: a compiled network or program as a standalone, readable nump
 
 Generated layout (``<out_dir>/<name>/``)::
 
-    __init__.py        run, INPUTS
-    __main__.py        python -m <name> [PORT=]X.npy ... -o OUT.npz [--counts]
-    program.py         run(inputs, *, with_counts=False): the segments in order
+    __init__.py        run, INPUTS, InputError, OutOfRangeWarning
+    __main__.py        python -m <name> [PORT=]X.npy ... -o OUT.npz [--counts] [--clip]
+    program.py         run(inputs, *, with_counts=False, out_of_range="reject"):
+                       the segments in order; input values above an encoder's
+                       range are refused (InputError) unless clipped on request
     network_<k>.py     the step loop of spiking segment k
     stage_<node>.py    per IR node: folded neuron updates, deliveries, encoders,
                        decoders, or the host op's compute(x)
@@ -23,13 +25,14 @@ import os
 import shutil
 from pathlib import Path
 
-from backends.artifact import _radarsnn_version, load
+from backends.artifact import load
 from backends.artifact_io import npz_bytes, write_atomic
 from backends.emit.names import slug
 from backends.emit.numpy_host import emit_host
 from backends.emit.numpy_loop import emit_network, import_from
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.manifest import radarsnn_version
 from backends.reference.guards import check_simulation
 from backends.reference.plan import build_plan
 from compiler.program import CompiledProgram, Segment
@@ -122,7 +125,7 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
     str(ident(name))  # validates
     if name.startswith("_"):
         raise CompileError(f"package name {name!r} must not start with '_'")
-    version = _radarsnn_version()
+    version = radarsnn_version()
     header = render(template("header.tmpl"), version=comment(version), chain=comment(chain, 80),
                     target=comment(_target_name(program, networks), 80))
     pkg = PackageBuilder()
@@ -132,6 +135,7 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
         Segment(kind="spiking", inputs=[e.port for e in networks[0].encoders],
                 outputs=[d.port for d in networks[0].decoders], network=networks[0])]
     body, imports, net_names = [], {"_kernels"}, []
+    decoded: set[str] = set()  # values decoded from spikes: clipped under every policy
     types = program.graph.infer_types() if program is not None else {}
     if program is not None:
         for node in program.graph.input_ids():
@@ -150,16 +154,22 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
             plan = build_plan(seg.network, arithmetic)
             files[module + ".py"] = emit_network(pkg, plan, integer, header)
             net_names.append({"module": module, "network": seg.network.name})
-            body.append(render("ports = $ports\nouts, spikes = $m.simulate({p: values[p] for p in "
-                               "ports})\n"
-                               "values.update(outs)\ncounts.append(spikes)", m=ident(module),
-                               ports=lit(tuple(e.port for e in seg.network.encoders))))
+            ports = tuple(e.port for e in seg.network.encoders)
+            body.append(render(
+                "ports = $ports\ndecoded = $decoded\n"
+                "policies = _kernels.segment_policy(out_of_range, ports, decoded)\n"
+                "outs, spikes = $m.simulate({p: values[p] for p in ports}, policies)\n"
+                "values.update(outs)\ncounts.append(spikes)", m=ident(module), ports=lit(ports),
+                decoded=lit(tuple(p for p in ports if p in decoded))))
+            decoded.update(d.port for d in seg.network.decoders)
         else:
             op = program.graph.op(seg.node)
             module = emit_host(pkg, seg.node, op, types[seg.inputs[0]])
             body.append(render("node = $n\nsource = $i\nvalues[node] = $m.compute(values[source])",
                                n=lit(seg.node),
                                m=ident(module), i=lit(seg.inputs[0])))
+            if decoded.intersection(seg.inputs):
+                decoded.add(seg.node)
         imports.add(module)
     inputs = (program.graph.input_ids() if program is not None
               else [e.port for e in networks[0].encoders])

@@ -95,7 +95,7 @@ def emit_network(pkg: PackageBuilder, plan: SimPlan, integer: bool, header: Code
     pro = []
     for j, enc in enumerate(net.encoders):
         pro.append(render("port = $port\nx_$j, f_$j = _kernels.port_value(inputs, port, $shape, "
-                          "$cplx)",
+                          "$cplx)\npolicy_$j = _kernels.policy(out_of_range, port)",
                           j=lit(j), port=lit(enc.port), cplx=lit(enc.split in ("re_im",
                                                                                "re_im_signed")),
                           shape=lit(pops[enc.population].dims[:-1] if N_PARTS[enc.split] else
@@ -124,11 +124,11 @@ def emit_network(pkg: PackageBuilder, plan: SimPlan, integer: bool, header: Code
                 encode_function(pkg, stage_of[pid], enc, pop, net.n_steps)))
             if isinstance(enc.code, LatencyCode):
                 pro.append(render("encode = $fn\nflat_$i, bounds_$i = encode(x_$j, n_frames, "
-                                  "framed)", i=i, fn=fn, j=j))
+                                  "framed, policy_$j)", i=i, fn=fn, j=j))
                 loop.append(render("fired = flat_$i[bounds_$i[t]:bounds_$i[t + 1]]", i=i))
             else:
-                pro.append(render("encode = $fn\nrates_$i = encode(x_$j, n_frames, framed)", i=i,
-                                  fn=fn, j=j))
+                pro.append(render("encode = $fn\nrates_$i = encode(x_$j, n_frames, framed, "
+                                  "policy_$j)", i=i, fn=fn, j=j))
                 ph = lit(enc.code.phase)
                 loop.append(render("fired = np.flatnonzero(np.floor((t + 1) * rates_$i + $ph)\n"
                                    "                       > np.floor(t * rates_$i + $ph))", i=i,

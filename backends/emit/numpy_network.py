@@ -25,6 +25,7 @@ import scipy.sparse as sp
 
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.reference.input_range import PER_PART
 from backends.reference.neuron import StepParams
 from compiler.snn.coding import N_PARTS, Decoder, Encoder, LatencyCode
 from compiler.snn.network import Population
@@ -179,8 +180,48 @@ def encode_function(pkg: PackageBuilder, module: str, enc: Encoder, pop: Populat
     pkg.add(module, render(
         template("encode.tmpl"), fn=ident(fn), summary=summary, port=comment(enc.port),
         pop=comment(pop.id), normalize_axes=lit(axes), split=lit(enc.split),
-        x_min=lit(code.x_min), x_max=lit(code.x_max), body=indent(join(lines))))
+        check=indent(_range_check(enc, n_steps)), x_min=lit(code.x_min), x_max=lit(code.x_max),
+        body=indent(join(lines))))
     return fn
+
+
+def _range_check(enc: Encoder, n_steps: int) -> Code:
+    """The out-of-range check of ``enc`` (``backends.reference.input_range``'s rule, folded).
+
+    Latency, nearest rounding: ``parts > x*`` with ``x* = value_of(t_min - 1/2)`` (``>=``
+    when ``rint(t_min - 1/2) < t_min``); floor rounding: ``parts > x_max``; rate:
+    one more spike than ``x_max`` gives; a one-step window (a threshold): never.
+    """
+    code = enc.code
+    if isinstance(code, LatencyCode):
+        if code.t_max - code.t_min <= 1:
+            bad = render("np.zeros(parts.shape, bool)")
+        elif code.rounding == "floor":
+            bad = render("parts > $hi", hi=lit(float(code.x_max)))
+        else:
+            edge = code.t_min - 0.5
+            bound = float(code.value_of(np.array(edge)))
+            op = ">=" if np.rint(edge) < code.t_min else ">"
+            bad = render("parts $op $bound", op=_code_op(op), bound=lit(bound))
+    else:
+        rate = render("$r * (parts - $lo) / $span", r=lit(float(code.max_rate)),
+                      lo=lit(float(code.x_min)), span=lit(float(code.x_max - code.x_min)))
+        top = float(np.floor(n_steps * code.max_rate + code.phase))
+        bad = render("np.floor($n * ($rate) + $ph) > $top", n=lit(int(n_steps)), rate=rate,
+                     ph=lit(float(code.phase)), top=lit(top))
+    bounds = f"[{code.x_min:.6g}, {code.x_max:.6g}]{PER_PART[enc.split]}"
+    lines = [render("bad = $bad", bad=bad)]
+    if N_PARTS[enc.split]:
+        lines.append(render("bad = bad.any(axis=-1)"))
+    lines.append(render("port = $port\nbounds = $bounds\n"
+                        "_kernels.check_range(port, x, bad, framed, policy, bounds)",
+                        port=lit(enc.port), bounds=lit(bounds)))
+    return join(lines)
+
+
+def _code_op(op: str) -> Code:
+    """A comparison operator as code (one of two fixed texts)."""
+    return render({">": ">", ">=": ">="}[op])
 
 
 #: What each decoder kind reads from the step loop: first spikes, counts or membranes.

@@ -22,7 +22,8 @@ __all__ = ["run_package"]
 
 
 def run_package(package: str | Path, inputs: Mapping[str, np.ndarray], *,
-                timeout_s: float = 600.0) -> tuple[dict[str, np.ndarray], list[dict[str, int]]]:
+                out_of_range: str = "reject", timeout_s: float = 600.0
+                ) -> tuple[dict[str, np.ndarray], list[dict[str, int]]]:
     """Run ``python -m <package> PORT=X.npy ... -o OUT.npz --counts`` in a subprocess.
 
     Parameters
@@ -31,6 +32,10 @@ def run_package(package: str | Path, inputs: Mapping[str, np.ndarray], *,
         The generated package directory (what :func:`~backends.emit.emit_numpy` returned).
     inputs : mapping of str to ndarray
         One array per input id / port.
+    out_of_range : {"reject", "clip"}
+        Input values above an encoder's range: refused (the package exits with one
+        ``error:`` line naming the port, the count, the first index and the range,
+        quoted in the ``SimulationError``), or clipped (``--clip``).
     timeout_s : float
         Give up after this many seconds.
 
@@ -43,8 +48,12 @@ def run_package(package: str | Path, inputs: Mapping[str, np.ndarray], *,
     Raises
     ------
     SimulationError
-        If the child process fails (its stderr is quoted) or times out.
+        If the child process fails (its stderr is quoted) or times out, or
+        ``out_of_range`` is not ``reject`` or ``clip``.
     """
+    if out_of_range not in ("reject", "clip"):
+        raise SimulationError(f"run_package: out_of_range={out_of_range!r} is not 'reject' or "
+                              "'clip' (the package's command line has --clip only)")
     folder = Path(package).resolve()
     with tempfile.TemporaryDirectory() as tmp:
         args = []
@@ -53,7 +62,8 @@ def run_package(package: str | Path, inputs: Mapping[str, np.ndarray], *,
             np.save(path, np.asarray(value), allow_pickle=False)
             args.append(f"{port}={path}")
         out = Path(tmp) / "out.npz"
-        cmd = [sys.executable, "-m", folder.name, *args, "-o", str(out), "--counts"]
+        cmd = [sys.executable, "-m", folder.name, *args, "-o", str(out), "--counts",
+               *(["--clip"] if out_of_range == "clip" else [])]
         try:
             done = subprocess.run(cmd, cwd=folder.parent, capture_output=True, text=True,
                                   timeout=timeout_s, check=False,

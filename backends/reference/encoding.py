@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -53,6 +54,8 @@ class LatencyTrain:
     flat: np.ndarray
     steps: np.ndarray
     bounds: np.ndarray
+    #: Each neuron spikes at most once (the step engine then keeps first spikes only).
+    at_most_once: ClassVar[bool] = True
 
     @classmethod
     def build(cls, code: LatencyCode, values: np.ndarray, n_steps: int) -> LatencyTrain:
@@ -88,6 +91,8 @@ class RateTrain:
     code: RateCode
     rates: np.ndarray
     n_steps: int
+    #: Neurons may spike many times.
+    at_most_once: ClassVar[bool] = False
 
     @classmethod
     def build(cls, code: RateCode, values: np.ndarray, n_steps: int) -> RateTrain:
@@ -155,12 +160,12 @@ def encode_inputs(
         Train builder per code type (default :data:`TRAINS`).
     out_of_range : {"reject", "warn", "clip"} or mapping of port to it
         What to do with finite values outside a code's range
-        (:mod:`backends.reference.input_range`): refuse them, clip them with a
-        warning (default), or clip them (per port with a mapping; ports it leaves
-        out take the default).
+        (:mod:`backends.reference.input_range`): refuse them (default), clip them
+        with an ``OutOfRangeWarning``, or clip them (per port with a mapping; ports
+        it leaves out take the default, ``reject``).
     clipped : dict, optional
-        Filled with the number of clipped values per port (``clip`` policy; a
-        port without any is left out).
+        Filled with the number of clipped values per port (``warn`` and ``clip``
+        policies; a port without any is left out).
 
     Returns
     -------
@@ -223,7 +228,7 @@ def encode_inputs(
         parts = split_values(x, enc.split)
         count = check_range(port, enc.code, parts, n_parts=N_PARTS[enc.split],
                             n_steps=network.n_steps, framed=n is not None,
-                            policy=policies[port], values=x)
+                            policy=policies[port], values=x, split=enc.split)
         if count and clipped is not None:
             clipped[port] = count
         parts = parts.reshape(n_frames, -1)

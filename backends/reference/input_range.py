@@ -23,24 +23,25 @@ before this check under every policy.
 The check runs on the encoded parts (after per-input normalisation and the
 signed/complex split); a value counts once however many of its parts are out.
 
-Policies (:data:`POLICIES`): ``"reject"`` raises :class:`~ir.errors.SimulationError`
-naming the port, the count, the first index and the range; ``"warn"`` (the default,
-:data:`DEFAULT_POLICY`) lets the code clip them and warns with the same facts
-(:class:`OutOfRangeWarning`); ``"clip"`` clips without a warning.  Under every
-policy the caller reports the count (``SimResult.clipped``), so out-of-range values
-are never propagated into spike times silently.
+Policies (:data:`POLICIES`): ``"reject"`` (the default, :data:`DEFAULT_POLICY`)
+raises :class:`~ir.errors.SimulationError` naming the port, the count, the first
+index, its value, the range and the ways out; ``"warn"`` lets the code clip them and
+warns with the same facts (:class:`OutOfRangeWarning`); ``"clip"`` clips without a
+warning.  Under ``warn`` and ``clip`` the caller reports the count
+(``SimResult.clipped``), so out-of-range values are never propagated into spike
+times silently.
 
-Why ``warn`` and not ``reject`` by default: the compiler's default calibration has no
-headroom (option ``headroom=1``), programs are calibrated on one frame and run on
-others (the README's quick start overshoots by 1 %), and the CFAR motifs bound their
-codes by quantiles on purpose (``cfar_quantiles``); refusing by default would stop
-those runs.  ``radarsnn run`` refuses by default (``--clip`` to clip).
+Clipping is a request, not a default: the compiler's default calibration has no
+headroom (option ``headroom=1``), so a program calibrated on one frame and run on
+another may see a few values above its range.  Calibrate on data that covers them,
+compile with ``options={"headroom": 1.1}`` (input encoders; ``cfar_range`` sets a CFAR
+code's range), or pass ``out_of_range="clip"``
+(``radarsnn run --clip``; a generated package's ``run(..., out_of_range="clip")``
+or ``--clip``).
 
 Examples
 --------
->>> import warnings
-
-import numpy as np
+>>> import numpy as np
 >>> from compiler.snn import LatencyCode
 >>> code = LatencyCode(t_max=8, x_min=0.0, x_max=1.0)   # one step = 1/8; x* = 1.0625
 >>> parts = np.array([[0.5, 1.05, -0.25, 2.0, 1.07]])     # (frames, values), split "none"
@@ -64,13 +65,22 @@ import numpy as np
 from compiler.snn.coding import LatencyCode, RateCode
 from ir.errors import SimulationError
 
-__all__ = ["DEFAULT_POLICY", "POLICIES", "OutOfRangeWarning", "check_policy", "check_range",
-           "out_of_range"]
+__all__ = ["DEFAULT_POLICY", "FIXES", "PER_PART", "POLICIES", "OutOfRangeWarning",
+           "check_policy", "check_range", "out_of_range"]
 
 #: What :func:`check_range` does with values outside a code's range.
 POLICIES = ("reject", "warn", "clip")
-#: The policy of :func:`~backends.reference.simulate` and ``run_program`` unless told.
-DEFAULT_POLICY = "warn"
+#: The policy of :func:`~backends.reference.simulate`, ``run_program`` and ``encode_inputs``
+#: unless told (``radarsnn run`` and generated packages too).
+DEFAULT_POLICY = "reject"
+#: The ways out named by the error and the warning.
+FIXES = ("calibrate on data that covers them (or widen the range: compile option headroom, "
+         "e.g. 1.1, or cfar_range for a CFAR's input), or clip them on request: "
+         "out_of_range='clip' (Python), --clip (radarsnn run)")
+#: What the range applies to, per encoder split (a signed split codes magnitudes per sign).
+PER_PART: dict[str, str] = {
+    "none": "", "re_im": " (per real and imaginary part)", "signed": " (per sign: |x|)",
+    "re_im_signed": " (per sign of the real and imaginary parts: |Re x|, |Im x|)"}
 
 
 class OutOfRangeWarning(UserWarning):
@@ -133,7 +143,8 @@ def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
 
 
 def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n_parts: int,
-                n_steps: int, framed: bool, policy: str, values: np.ndarray | None = None) -> int:
+                n_steps: int, framed: bool, policy: str, values: np.ndarray | None = None,
+                split: str = "none") -> int:
     """Apply the out-of-range policy to one port's encoded parts.
 
     Parameters
@@ -149,10 +160,13 @@ def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n
     framed : bool
         Whether the caller's array had a frames axis (it is then part of the index).
     policy : {"reject", "warn", "clip"}
-        Refuse; or accept (the codes clip), warn (``warn``) and return the count.
+        Refuse (``reject``); or accept (the codes clip), warn (``warn`` only) and
+        return the count.
     values : ndarray, optional
         The values as given, ``(frames, *value_shape)``, to quote the first one
         (default: the first offending part).
+    split : str
+        The encoder's split (the message says what the range applies to).
 
     Returns
     -------
@@ -163,8 +177,8 @@ def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n
     ------
     SimulationError
         Under ``reject`` when any value is out of range: the port, the count, the
-        first index (frames first iff ``framed``), its value, the range and the two
-        ways out.
+        first index (frames first iff ``framed``), its value, the range and the
+        ways out (:data:`FIXES`).
 
     Warns
     -----
@@ -179,15 +193,14 @@ def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n
     index = first if framed else first[1:]
     value = values[first] if values is not None else np.ravel(parts[first])[0]
     facts = (f"input {port!r}: {count} of {bad.size} values are above the encoder's range "
-             f"[{code.x_min:.6g}, {code.x_max:.6g}] by more than its resolution (clipping "
-             f"changes their spikes), first at index {index} (value {_quote(value)})")
+             f"[{code.x_min:.6g}, {code.x_max:.6g}]{PER_PART[split]} by more than its "
+             f"resolution (clipping changes their spikes), first at index {index} (value "
+             f"{_quote(value)})")
     if policy == "warn":
-        warnings.warn(f"{facts}; clipped them (out_of_range='warn'); calibrate on data that "
-                      "covers them (or raise the headroom), or pass out_of_range='clip' (no "
-                      "warning) or 'reject'", OutOfRangeWarning, stacklevel=4)
+        warnings.warn(f"{facts}; clipped them (out_of_range='warn'); {FIXES}",
+                      OutOfRangeWarning, stacklevel=4)
         return count
-    raise SimulationError(f"{facts}; calibrate on data that covers them (or raise the "
-                          "headroom), or pass out_of_range='clip' to clip them", node=port)
+    raise SimulationError(f"{facts}; {FIXES}", node=port)
 
 
 def _quote(value: object) -> str:

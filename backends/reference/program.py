@@ -202,7 +202,9 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     out_of_range : {"reject", "warn", "clip"}
         Policy for values above an encoder's range
         (:mod:`backends.reference.input_range`) where the value comes from the
-        caller's inputs through host segments only.  Values decoded from an
+        caller's inputs through host segments only: refuse them (``reject``, the
+        default), clip them with an ``OutOfRangeWarning`` (``warn``), or clip
+        them (``clip``; ``radarsnn run --clip``).  Values decoded from an
         upstream spiking segment carry that segment's approximation error, so
         they are always clipped; every clipped value is counted in
         :attr:`ProgramResult.clipped`.

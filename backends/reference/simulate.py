@@ -72,9 +72,12 @@ def simulate(
         A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).
     out_of_range : {"reject", "warn", "clip"} or mapping of port to it
         Finite input values above an encoder's range
-        (:mod:`backends.reference.input_range`): refuse them, clip them with an
-        ``OutOfRangeWarning`` (default), or clip them; clipped values are counted
-        in :attr:`SimResult.clipped`.  NaN/Inf are always refused.
+        (:mod:`backends.reference.input_range`): refuse them with a
+        ``SimulationError`` naming the port, count, first index and range
+        (``reject``, the default), clip them with an ``OutOfRangeWarning``
+        (``warn``), or clip them (``clip``); a mapping sets the policy per port
+        (ports it leaves out: ``reject``).  Clipped values are counted in
+        :attr:`SimResult.clipped`.  NaN/Inf are always refused.
     max_memory_bytes : int or None
         Refuse, before allocating, a run whose estimated memory
         (:mod:`backends.reference.guards`) exceeds this (None: no limit).

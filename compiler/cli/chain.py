@@ -265,7 +265,8 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
                    help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file "
                         "(default loihi2)")
     p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
-                   help="calibration input per input node (default: synthetic noise)")
+                   help="calibration input per input node (default: seeded synthetic noise "
+                        "in each input's domain)")
     p.add_argument("--motif", "-m", action="append", metavar="NODE_OR_OP=MOTIF",
                    help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
     p.add_argument("--time-steps", type=int, help="override the per-motif time window")
