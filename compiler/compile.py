@@ -44,7 +44,8 @@ from compiler.passes.report import ReportPass
 from compiler.passes.split import Split
 from compiler.program import CompiledProgram
 from ir import Graph
-from ir.errors import CompileError
+from ir.errors import CompileError, IRError
+from ir.evaluate import EvalRegistry, eval_registry
 
 __all__ = ["compile_graph", "default_pipeline"]
 
@@ -84,6 +85,7 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
                   calibration_inputs: Mapping[str, np.ndarray] | None = None,
                   time_steps: int | None = None, weight_bits: int | None = None,
                   registry: LoweringRegistry | None = None,
+                  evaluators: EvalRegistry | None = None,
                   progress: Progress | None = None,
                   options: Mapping[str, Any] | None = None) -> CompiledProgram:
     """Compile a radar chain into spiking and host segments.
@@ -109,6 +111,12 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         Quantize weights to this many bits (None: exact floats).
     registry : LoweringRegistry, optional
         Lowering rules (default :func:`compiler.lowering.default_registry`).
+    evaluators : mapping of op class to implementation, optional
+        Reference implementations of new ops (``impl(node_id, op, args, types) ->
+        array``), added to :data:`ir.evaluate.EVAL_REGISTRY`: calibration evaluates
+        with them, and the program keeps them (``program.evaluators``) for its
+        host segments, so :func:`backends.reference.run_program` runs it as is.
+        Nothing global changes (docs/howto-op.md).
     progress : callable, optional
         ``progress(pass_name, message)`` on long work.
     options : mapping, optional
@@ -123,8 +131,9 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
     IRError
         The graph does not verify (naming the node).
     CompileError
-        An option or motif cannot be honoured (naming the node and the fix), or an
-        option's value breaks its rule (:mod:`compiler.option_checks`).
+        An option or motif cannot be honoured (naming the node and the fix), an
+        option's value breaks its rule (:mod:`compiler.option_checks`), ``evaluators``
+        is malformed, or a node left on the host has no implementation (naming it).
     BudgetError
         The program does not fit the target (naming the node, budget and amount), or
         its estimated compile memory or time exceeds the options ``max_memory_bytes``
@@ -142,13 +151,33 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         raise CompileError(f"compile_graph takes a Graph or a chain file path; got "
                            f"{type(graph).__name__}")
     check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
+    try:
+        impls = eval_registry(evaluators)
+    except IRError as err:
+        raise CompileError(f"compile_graph: {err}") from None
     profile = None if target is None else load_profile(target)
     options = {**dict(options or {}), "motifs": dict(motifs or {}), "calibration": calibration,
                "time_steps": time_steps, "weight_bits": weight_bits}
     ctx = CompileContext(target=profile, options=options,
                          calibration_inputs=dict(calibration_inputs or {}),
-                         lowering=registry or default_registry())
+                         lowering=registry or default_registry(),
+                         evaluators=dict(evaluators or {}))
     if progress is not None:
         ctx.progress = progress
     program = CompiledProgram(graph=graph, options=options, target=profile)
-    return run_pipeline(default_pipeline(options, hardware=profile is not None), ctx, program)
+    program = run_pipeline(default_pipeline(options, hardware=profile is not None), ctx, program)
+    _check_host_implementations(program, impls)
+    return program
+
+
+def _check_host_implementations(program: CompiledProgram, impls: Mapping[type, Any]) -> None:
+    """Refuse a host segment whose op has no reference implementation (it could not run)."""
+    for node in program.host_nodes:
+        op = program.graph.op(node)
+        if type(op) not in impls:
+            name = type(op).__name__
+            raise CompileError(
+                f"node {node!r} ({op.op}) runs on the host, but {name} has no reference "
+                f"implementation to run it there; pass compile_graph(..., "
+                f"evaluators={{{name}: function}}) or register a spiking motif for it "
+                "(docs/howto-op.md)", node=node)

@@ -78,6 +78,11 @@ class CompiledProgram:
         ``"quantize"``, ``"placement"``, ``"report"`` …).
     target : object, optional
         The hardware profile compiled for.
+    evaluators : dict, optional
+        Reference implementations (op class → function) of ops the built-in
+        ``ir.EVAL_REGISTRY`` lacks, given to ``compile_graph(..., evaluators=)``:
+        the host segments run with them.  Code, not data: never saved in an
+        artifact (a loaded program knows the built-in ops only).
     """
 
     graph: Graph
@@ -85,6 +90,7 @@ class CompiledProgram:
     options: dict[str, Any] = field(default_factory=dict)
     records: dict[str, Any] = field(default_factory=dict)
     target: Any = None
+    evaluators: dict[type, Any] = field(default_factory=dict)
 
     @property
     def networks(self) -> list[SpikingNetwork]:

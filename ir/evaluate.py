@@ -49,7 +49,8 @@ from ir.ops import (
 )
 from ir.types import TensorType
 
-__all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "evaluate"]
+__all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "eval_registry",
+           "evaluate", "evaluate_node"]
 
 Implementation = Callable[[str, Op, list[np.ndarray], list[TensorType]], np.ndarray]
 """``impl(node_id, op, input_arrays, input_types) -> output array``."""
@@ -232,7 +233,7 @@ def evaluate(
     ir.errors.IRError: graph 'chain': missing input array(s) for ['x']; got arrays for ['y'] \
 which are not graph inputs (inputs: ['x'])
     """
-    impls = EVAL_REGISTRY if registry is None else {**EVAL_REGISTRY, **registry}
+    impls = eval_registry(registry)
     graph.verify()
     types = graph.infer_types()
     _check_input_names(graph, inputs)
@@ -242,22 +243,112 @@ which are not graph inputs (inputs: ['x'])
         if op.arity == 0:
             values[node_id] = check_input(node_id, out_type, inputs[node_id])
             continue
-        impl = impls.get(type(op))
-        if impl is None:
-            raise IRError(
-                f"node {node_id!r} ({op.op}): no implementation for {type(op).__name__}; "
-                "pass registry={OpClass: function} to evaluate",
-                node=node_id,
-            )
         in_ids = graph.inputs_of(node_id)
-        try:
-            out = impl(node_id, op, [values[i] for i in in_ids], [types[i] for i in in_ids])
-        except IRError:
-            raise
-        except RadarSNNError as err:
-            raise IRError(f"node {node_id!r} ({op.op}): {err}", node=node_id) from err
-        values[node_id] = _check_output(node_id, op, out_type, out)
+        values[node_id] = evaluate_node(node_id, op, [values[i] for i in in_ids],
+                                        [types[i] for i in in_ids], out_type, impls)
     return values
+
+
+def eval_registry(extra: EvalRegistry | None = None) -> dict[type[Op], Implementation]:
+    """The reference implementations: :data:`EVAL_REGISTRY` with ``extra`` added (a new dict).
+
+    Parameters
+    ----------
+    extra : mapping of op class to implementation, optional
+        Implementations of new ops, or replacements of built-in ones.
+
+    Returns
+    -------
+    dict
+        Op class -> implementation; :data:`EVAL_REGISTRY` itself is never changed.
+
+    Raises
+    ------
+    IRError
+        If ``extra`` is not a mapping, a key is not an :class:`~ir.ops.Op` subclass or a
+        value is not callable (naming the entry).
+
+    Examples
+    --------
+    >>> from ir.ops import Magnitude
+    >>> impls = eval_registry({Magnitude: lambda node_id, op, args, types: abs(args[0])})
+    >>> impls[Magnitude] is EVAL_REGISTRY[Magnitude], len(impls) == len(EVAL_REGISTRY)
+    (False, True)
+    >>> eval_registry({"magnitude": abs})
+    Traceback (most recent call last):
+    ...
+    ir.errors.IRError: evaluators: key 'magnitude' is not an op class; map op classes to \
+functions, e.g. {Scale: evaluate_scale}
+    """
+    if extra is None:
+        return dict(EVAL_REGISTRY)
+    if not isinstance(extra, Mapping):
+        raise IRError(f"evaluators must be a mapping of op class to function; got "
+                      f"{type(extra).__name__}")
+    for key, impl in extra.items():
+        if not (isinstance(key, type) and issubclass(key, Op)):
+            raise IRError(f"evaluators: key {key!r} is not an op class; map op classes to "
+                          "functions, e.g. {Scale: evaluate_scale}")
+        if not callable(impl):
+            raise IRError(f"evaluators: the implementation of {key.__name__} is a "
+                          f"{type(impl).__name__}, not a function impl(node_id, op, args, types)")
+    return {**EVAL_REGISTRY, **extra}
+
+
+def evaluate_node(node_id: str, op: Op, args: list[np.ndarray], types: list[TensorType],
+                  out_type: TensorType, registry: EvalRegistry) -> np.ndarray:
+    """One node's value: its op's implementation applied to its input arrays, checked.
+
+    Parameters
+    ----------
+    node_id : str
+        The node (named in errors).
+    op : Op
+        Its op.
+    args : list of ndarray
+        Its input values, in input order.
+    types : list of TensorType
+        Their types.
+    out_type : TensorType
+        The node's inferred type; the result must have its shape and kind.
+    registry : mapping of op class to implementation
+        Where the op's implementation is looked up (e.g. :func:`eval_registry`).
+
+    Returns
+    -------
+    ndarray
+        float64, complex128, or bool for masks.
+
+    Raises
+    ------
+    IRError
+        No implementation for the op's class, an implementation that fails with a
+        project error, or a result of the wrong shape or kind (naming the node).
+
+    Examples
+    --------
+    >>> from ir.ops import Sum
+    >>> t = TensorType(axes={"rx": 2, "range": 3})
+    >>> evaluate_node("s", Sum(axis="rx"), [np.ones((2, 3))], [t],
+    ...               TensorType(axes={"range": 3}), EVAL_REGISTRY).tolist()
+    [2.0, 2.0, 2.0]
+    """
+    impl = registry.get(type(op))
+    if impl is None:
+        name = type(op).__name__
+        raise IRError(
+            f"node {node_id!r} ({op.op}): no implementation for {name}; pass "
+            f"{{{name}: function}} as evaluate(..., registry=) or "
+            f"compile_graph(..., evaluators=) (docs/howto-op.md)",
+            node=node_id,
+        )
+    try:
+        out = impl(node_id, op, args, types)
+    except IRError:
+        raise
+    except RadarSNNError as err:
+        raise IRError(f"node {node_id!r} ({op.op}): {err}", node=node_id) from err
+    return _check_output(node_id, op, out_type, out)
 
 
 def _check_input_names(graph: Graph, inputs: Mapping[str, object]) -> None:

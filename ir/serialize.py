@@ -131,7 +131,9 @@ def graph_from_dict(data: Mapping[str, Any], *, registry: OpRegistry | None = No
     ...
     ir.errors.ChainFileError: chain 'chain', node 'w': unknown op 'windw'; valid ops: \
 adc_input, cfar, classifier, cluster, dft, input, linear, log, magnitude, output, sum, threshold, \
-track, window
+track, window (an op defined in Python is known to readers given its class, \
+Graph.from_yaml(..., registry={**ir.OP_REGISTRY, 'windw': ItsClass}); program artifacts and the \
+radarsnn command know the built-in ops only; docs/howto-op.md)
     """
     registry = OP_REGISTRY if registry is None else registry
     if not isinstance(data, Mapping):
@@ -190,9 +192,13 @@ def _read_envelope(
     where = f"chain {name!r}, node {id!r}"
     op_name = entry.get("op")
     if not isinstance(op_name, str) or op_name not in registry:  # a list/dict is unhashable
+        own = (f" (an op defined in Python is known to readers given its class, "
+               f"Graph.from_yaml(..., registry={{**ir.OP_REGISTRY, {op_name!r}: ItsClass}}); "
+               "program artifacts and the radarsnn command know the built-in ops only; "
+               "docs/howto-op.md)" if isinstance(op_name, str) and is_name(op_name) else "")
         raise ChainFileError(
             f"{where}: " + ("missing 'op'" if op_name is None else f"unknown op {op_name!r}")
-            + f"; valid ops: {', '.join(sorted(registry))}",
+            + f"; valid ops: {', '.join(sorted(registry))}{own}",
             node=id,
         )
     if "input" in entry and "inputs" in entry:

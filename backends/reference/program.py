@@ -3,7 +3,8 @@
 Values flow between segments by radar-IR node id: a spiking segment's encoder
 ports read values, its decoder ports produce them; a host segment evaluates
 its node with the reference interpreter's implementation (the conventional
-numpy meaning, :data:`ir.evaluate.EVAL_REGISTRY`).
+numpy meaning, :data:`ir.evaluate.EVAL_REGISTRY`, plus the implementations of
+new ops the program was compiled with, ``program.evaluators``).
 
 Examples
 --------
@@ -32,7 +33,7 @@ from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.evaluate import EVAL_REGISTRY, check_input
+from ir.evaluate import check_input, eval_registry, evaluate_node
 
 __all__ = ["ProgramResult", "check_program", "program_plans", "run_program"]
 
@@ -214,10 +215,20 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     Raises
     ------
     IRError
-        An input array of the wrong shape or dtype, or with NaN/Inf (naming the input).
+        An input array of the wrong shape or dtype, or with NaN/Inf (naming the input); a
+        host node without an implementation, or whose implementation fails or returns
+        the wrong shape (naming the node).
     SimulationError
         Missing or unknown inputs, a value out of an encoder's range under
         ``reject``, an unknown policy, or a segment that cannot run.
+
+    Notes
+    -----
+    A host segment evaluates its node with :func:`ir.evaluate.evaluate_node`, looking
+    the op up in :data:`ir.evaluate.EVAL_REGISTRY` plus the evaluators the program
+    was compiled with (``compile_graph(..., evaluators=)``, kept in
+    ``program.evaluators``); a host node whose op has none raises
+    :class:`~ir.errors.IRError` naming the node and the fix.
     """
     where = f"program {program.graph.name!r}"
     check_policy(out_of_range, where)
@@ -239,6 +250,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                               f"graph's input nodes {sorted(expected)} (missing "
                               f"{sorted(missing)}, unknown {sorted(extra)})")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
+    impls = eval_registry(program.evaluators)
     decoded: set[str] = set()  # nodes whose value went through a spiking segment's decoder
     sims = []
     if plans is not None and len(plans) != len(program.networks):
@@ -258,10 +270,10 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                            for k, v in result.outputs.items()})
             sims.append(result)
         else:
-            op = graph.op(seg.node)
-            args = [values[i] for i in seg.inputs]
-            values[seg.node] = EVAL_REGISTRY[type(op)](seg.node, op, args,
-                                                       [types[i] for i in seg.inputs])
+            values[seg.node] = evaluate_node(seg.node, graph.op(seg.node),
+                                             [values[i] for i in seg.inputs],
+                                             [types[i] for i in seg.inputs], types[seg.node],
+                                             impls)
             if decoded.intersection(seg.inputs):
                 decoded.add(seg.node)
     outputs = {k: values[k] for k in graph.output_ids()}

@@ -60,6 +60,10 @@ class CompileContext:
         Sample inputs by input node id, for the calibrate pass.
     lowering : object, optional
         The lowering registry (``compiler.lowering.LoweringRegistry``) to use.
+    evaluators : mapping of op class to implementation
+        Reference implementations added to :data:`ir.evaluate.EVAL_REGISTRY` (new ops,
+        ``impl(node_id, op, args, types) -> array``): what ``calibrate`` evaluates with
+        and what the program's host segments run (:func:`run_pipeline` records them).
     progress : callable
         ``progress(pass_name, message)`` for long work (silent by default).
     """
@@ -68,6 +72,7 @@ class CompileContext:
     options: dict[str, Any] = field(default_factory=dict)
     calibration_inputs: Mapping[str, Any] = field(default_factory=dict)
     lowering: Any = None
+    evaluators: Mapping[type, Callable[..., Any]] = field(default_factory=dict)
     progress: Progress = _silent
 
 
@@ -84,7 +89,15 @@ class Pass:
 
 def run_pipeline(passes: Iterable[Pass], ctx: CompileContext,
                  program: CompiledProgram) -> CompiledProgram:
-    """Apply ``passes`` in order, timing each (seconds stored in ``records["timings"]``)."""
+    """Apply ``passes`` in order, timing each (seconds stored in ``records["timings"]``).
+
+    The context's extra evaluators, if any, are kept as ``program.evaluators``
+    (op class → implementation): the program's host segments run with them
+    (:func:`backends.reference.run_program`), so a program compiled with a new op
+    runs as compiled.  They stay in memory: a saved program artifact holds data only.
+    """
+    if ctx.evaluators:
+        program.evaluators = dict(ctx.evaluators)
     timings = program.records.setdefault("timings", {})
     for p in passes:
         ctx.progress(p.name, "start")

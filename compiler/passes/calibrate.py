@@ -18,8 +18,11 @@ Policies (compile option ``calibration``):
 Measured records also hold per-axis profiles (``axis_max``, ``axis_quantiles``,
 see :mod:`compiler.calibration`): what per-bin stage gains are set from.
 
-Bound propagation (no calibration inputs): ``window`` keeps the bound,
-``dft``/``linear`` give ``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b``.
+Calibration inputs are evaluated with :func:`ir.evaluate.evaluate` and the
+context's evaluators (``CompileContext.evaluators``), so a chain holding an op of
+the user's own is measured like any other.  Bound propagation (no calibration
+inputs): ``window`` keeps the bound, ``dft``/``linear`` give
+``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b``; other ops get no bound.
 
 Examples
 --------
@@ -155,7 +158,7 @@ class Calibrate(Pass):
             for frame in frames:
                 frame = {k: normalize_values(v, tuple(types[k].index(a) for a in norm[k]))
                          for k, v in frame.items()}
-                for node, value in evaluate(graph, frame).items():
+                for node, value in evaluate(graph, frame, registry=ctx.evaluators).items():
                     if value.dtype != bool:
                         per_node.setdefault(node, []).append(value)
             nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()),

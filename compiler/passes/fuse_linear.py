@@ -14,6 +14,9 @@ exactly up to rounding, checked against :func:`ir.evaluate.evaluate` in the test
    qualifies; two dense DFTs never do).
 
 The surviving node keeps the id of the later one, so consumers are unchanged.
+Every other node keeps its op object: the pass rebuilds the graph from the
+graph's own ops (never by re-reading a chain file with the built-in op
+registry), so a chain holding ops of the user's own passes through untouched.
 ``records["fuse-linear"]`` lists every rewrite: ``{"rule", "into", "folded",
 "synapses_before", "synapses_after"}``.
 
@@ -45,26 +48,35 @@ from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
 from ir import Graph
+from ir.ops import DFT, Linear, Op, Window
 from radar.windows import window_coefficients
 
 __all__ = ["FuseLinear"]
 
-_LINEAR = ("dft", "linear")
-
-
-def _linear_node(node_id: str, like: dict[str, Any], w: np.ndarray, axis: str,
-                 out_axis: str, *, complex_out: bool) -> dict[str, Any]:
-    """The ``linear`` node replacing ``node_id``; it keeps the replaced node's output type, so
-    a complex output stays complex even when the fused product has no imaginary part."""
-    node = {"id": node_id, "op": "linear", "input": like["input"], "axis": axis,
-            "out_axis": out_axis, "matrix": w.real.tolist()}
-    if complex_out or np.any(w.imag != 0):
-        node["matrix_imag"] = w.imag.tolist()
-    return node
+def _linear_op(w: np.ndarray, axis: str, out_axis: str, *, complex_out: bool) -> Linear:
+    """The ``linear`` op applying ``w``; it keeps the replaced node's output type, so a
+    complex output stays complex even when the fused product has no imaginary part."""
+    imag = w.imag.tolist() if complex_out or np.any(w.imag != 0) else None
+    return Linear(axis=axis, out_axis=out_axis, matrix=w.real.tolist(), matrix_imag=imag)
 
 
 def _nnz(w: np.ndarray) -> int:
     return int(np.count_nonzero(w))
+
+
+def _rebuilt(graph: Graph, folded: str, keep_folded: bool, into: str, op: Op,
+             source: str) -> Graph:
+    """``graph`` with node ``into`` applying ``op`` to ``source``, and ``folded`` dropped
+    unless ``keep_folded``; every other node (op object, inputs, order) as it was."""
+    out = Graph(graph.name)
+    for node_id in graph:
+        if node_id == folded and not keep_folded:
+            continue
+        if node_id == into:
+            out.add(op, inputs=source, id=node_id)
+        else:
+            out.add(graph.op(node_id), inputs=graph.inputs_of(node_id), id=node_id)
+    return out
 
 
 @dataclass(frozen=True)
@@ -74,71 +86,57 @@ class FuseLinear(Pass):
     name = "fuse-linear"
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        data = program.graph.to_dict()
+        graph = program.graph
         record: list[dict[str, Any]] = []
-        while self._rewrite_once(data, record):
-            pass
+        while (rewritten := self._rewrite_once(graph, record)) is not None:
+            graph = rewritten
         if record:
-            graph = Graph.from_dict(data)
             graph.verify()
             program.graph = graph
         program.records[self.name] = record
         return program
 
-    def _rewrite_once(self, data: dict[str, Any], record: list[dict[str, Any]]) -> bool:
-        graph = Graph.from_dict(data)
+    def _rewrite_once(self, graph: Graph, record: list[dict[str, Any]]) -> Graph | None:
+        """The graph after the first rewrite that applies (appended to ``record``), or None."""
         types = graph.infer_types()
-        nodes = {n["id"]: n for n in data["nodes"]}
         for b_id in graph.topological_order():
-            b = nodes[b_id]
-            if b["op"] not in _LINEAR or "input" not in b:
+            op_b = graph.op(b_id)
+            if not isinstance(op_b, DFT | Linear):
                 continue
-            a = nodes[b["input"]]
-            only_b = graph.consumers_of(a["id"]) == [b_id]
-            in_axis = b["axis"]
-            if a["op"] == "window" and a["axis"] == in_axis:
-                w_in = types[a["input"]]
-                taps = window_coefficients(a.get("kind", "hann"), w_in.axes[in_axis])
-                op_b = graph.op(b_id)
-                if b["op"] == "dft" and b.get("window") is None:
-                    new = dict(b, input=a["input"])
-                    if a.get("kind", "hann") != "rect":
-                        new["window"] = a.get("kind", "hann")
+            (a_id,) = graph.inputs_of(b_id)
+            op_a = graph.op(a_id)
+            only_b = graph.consumers_of(a_id) == [b_id]
+            in_axis = op_b.axis
+            if isinstance(op_a, Window) and op_a.axis == in_axis:
+                (source,) = graph.inputs_of(a_id)
+                n_in = types[source].axes[in_axis]
+                if isinstance(op_b, DFT) and op_b.window is None:
+                    new = op_b if op_a.kind == "rect" else DFT.model_validate(
+                        {**op_b.model_dump(), "window": op_a.kind})
                     rule = "window-into-dft"
-                elif b["op"] == "linear":
-                    w = op_weights(op_b, w_in.axes[in_axis], node=b_id) * taps[None, :]
-                    new = _linear_node(b_id, dict(b, input=a["input"]), w, in_axis,
-                                       b.get("out_axis") or in_axis,
-                                       complex_out=types[b_id].complex)
+                elif isinstance(op_b, Linear):
+                    taps = window_coefficients(op_a.kind, n_in)
+                    w = op_weights(op_b, n_in, node=b_id) * taps[None, :]
+                    new = _linear_op(w, in_axis, op_b.out_axis or in_axis,
+                                     complex_out=types[b_id].complex)
                     rule = "window-into-linear"
                 else:
                     continue
-                self._replace(data, a, b, new, only_b)
-                record.append({"rule": rule, "into": b_id, "folded": a["id"],
+                record.append({"rule": rule, "into": b_id, "folded": a_id,
                                "synapses_before": None, "synapses_after": None})
-                return True
-            if a["op"] in _LINEAR and only_b and (a.get("out_axis") or a["axis"]) == in_axis:
-                t_a = types[a["input"]]
-                w_a = op_weights(graph.op(a["id"]), t_a.axes[a["axis"]], node=a["id"])
-                w_b = op_weights(graph.op(b_id), types[a["id"]].axes[in_axis], node=b_id)
+                return _rebuilt(graph, a_id, not only_b, b_id, new, source)
+            if (isinstance(op_a, DFT | Linear) and only_b
+                    and (op_a.out_axis or op_a.axis) == in_axis):
+                (source,) = graph.inputs_of(a_id)
+                w_a = op_weights(op_a, types[source].axes[op_a.axis], node=a_id)
+                w_b = op_weights(op_b, types[a_id].axes[in_axis], node=b_id)
                 w = w_b @ w_a
                 before, after = _nnz(w_a) + _nnz(w_b), _nnz(np.round(w, 12))
                 if after >= before:
                     continue
-                new = _linear_node(b_id, dict(b, input=a["input"]), w, a["axis"],
-                                   b.get("out_axis") or in_axis,
-                                   complex_out=types[b_id].complex)
-                self._replace(data, a, b, new, True)
-                record.append({"rule": "linear-chain", "into": b_id, "folded": a["id"],
+                new = _linear_op(w, op_a.axis, op_b.out_axis or in_axis,
+                                 complex_out=types[b_id].complex)
+                record.append({"rule": "linear-chain", "into": b_id, "folded": a_id,
                                "synapses_before": before, "synapses_after": after})
-                return True
-        return False
-
-    @staticmethod
-    def _replace(data: dict[str, Any], a: dict, b: dict, new: dict, drop_a: bool) -> None:
-        out = []
-        for n in data["nodes"]:
-            if n is a and drop_a:
-                continue
-            out.append(new if n is b else n)
-        data["nodes"] = out
+                return _rebuilt(graph, a_id, False, b_id, new, source)
+        return None
