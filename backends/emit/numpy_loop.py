@@ -95,9 +95,12 @@ def emit_network(pkg: PackageBuilder, plan: SimPlan, integer: bool, header: Code
     pro = []
     for j, enc in enumerate(net.encoders):
         pro.append(render("port = $port\nx_$j, f_$j = _kernels.port_value(inputs, port, $shape, "
-                          "$cplx)\npolicy_$j = _kernels.policy(out_of_range, port)",
+                          "$cplx)\npolicy_$j = $policy",
                           j=lit(j), port=lit(enc.port), cplx=lit(enc.split in ("re_im",
                                                                                "re_im_signed")),
+                          # a saturating code (its top a calibration quantile) clips by design
+                          policy=render('"clip"') if enc.saturate else
+                          render("_kernels.policy(out_of_range, port)"),
                           shape=lit(pops[enc.population].dims[:-1] if N_PARTS[enc.split] else
                                     pops[enc.population].dims)))
     for qid, (module, fn) in deliver.items():

@@ -228,7 +228,8 @@ def encode_inputs(
         parts = split_values(x, enc.split)
         count = check_range(port, enc.code, parts, n_parts=N_PARTS[enc.split],
                             n_steps=network.n_steps, framed=n is not None,
-                            policy=policies[port], values=x, split=enc.split)
+                            policy="clip" if enc.saturate else policies[port], values=x,
+                            split=enc.split)
         if count and clipped is not None:
             clipped[port] = count
         parts = parts.reshape(n_frames, -1)

@@ -88,7 +88,9 @@ DEFAULT_STEPS = 100
 _POSITIVE = float(np.finfo(np.float64).tiny)
 
 
-def _range(ctx: LoweringContext, node: str, source: str, kind: str) -> tuple[float, float, str]:
+def _range(ctx: LoweringContext, node: str, source: str,
+           kind: str) -> tuple[float, float, str, bool]:
+    """The code's range, where it came from, and whether its top saturates on purpose."""
     given = ctx.option("cfar_range")
     if isinstance(given, dict):
         given = given.get(node)
@@ -97,12 +99,13 @@ def _range(ctx: LoweringContext, node: str, source: str, kind: str) -> tuple[flo
         if not (math.isfinite(lo) and math.isfinite(hi) and hi > max(lo, 0.0)):
             raise CompileError(f"node {node!r} (cfar): cfar_range={given!r} must be finite with "
                                "x_hi > max(x_lo, 0)", node=node)
-        return lo, hi, "option"
+        return lo, hi, "option", False
     quantiles = ctx.option("cfar_quantiles")
     if isinstance(quantiles, dict):  # per node id or per CFAR kind
         quantiles = quantiles.get(node, quantiles.get(kind))
     quantiles = tuple(quantiles or RANGE_QUANTILES[kind])
-    return input_range(ctx.calibration.get(source), quantiles, node=node, source=source)
+    lo, hi, how = input_range(ctx.calibration.get(source), quantiles, node=node, source=source)
+    return lo, hi, how, how == "quantiles" and float(quantiles[1]) < 1.0
 
 
 def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -> Value:
@@ -135,7 +138,7 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
     win = op.window(node, t_in)
     alpha = op.alpha_for(win.n_train)
     n_steps = int(ctx.option("time_steps", DEFAULT_STEPS))
-    lo, hi, how = _range(ctx, node, value.node, op.kind)
+    lo, hi, how, saturate = _range(ctx, node, value.node, op.kind)
     map_shape = tuple(t_in.axes[a] for a in win.axes)
     n_avail = training_counts(map_shape, guard=list(win.guard), train=list(win.train),
                               edge=list(win.edge))
@@ -155,7 +158,7 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
         train_w = -alpha
     # encode first: decoding a spiking input to the host closes the open network, and the
     # builder must be the one the encoder's population lives in
-    src = ctx.encode(value, consumer=node, code=code, motif=MOTIF)
+    src = ctx.encode(value, consumer=node, code=code, motif=MOTIF, saturate=saturate)
     builder = ctx.builder()
     det = builder.population(node, "det", dict(t_in.axes), params, motif=MOTIF)
     kernel = train_w * training_mask(list(win.guard), list(win.train)).astype(np.float64)

@@ -122,7 +122,7 @@ class LoweringContext:
 
     def encode(self, value: Value, *, consumer: str, code: LatencyCode | RateCode,
                split: Split = "none", motif: str,
-               normalize_axes: tuple[str, ...] = ()) -> Population:
+               normalize_axes: tuple[str, ...] = (), saturate: bool = False) -> Population:
         """A source population in the open network that carries ``value`` with ``code``.
 
         The population has the value's axes plus a ``part`` axis if ``split``
@@ -130,7 +130,8 @@ class LoweringContext:
         value's node id.  A spike value is decoded to the host first (use its
         spikes directly instead where the consuming motif can).  ``normalize_axes``
         (the ``per-input`` policy) makes the encoder divide each slice over those
-        axes by its largest part at run time.
+        axes by its largest part at run time.  ``saturate`` marks a code whose
+        top lies below the calibration maximum on purpose (:class:`Encoder`).
         """
         host = self.to_host(value)
         if not host.type.complex and split in ("re_im", "re_im_signed"):
@@ -146,7 +147,8 @@ class LoweringContext:
             shape[PART_AXIS] = N_PARTS[split]
         pop = builder.population(consumer, "in", shape, motif=motif, source=True)
         builder.encoder(Encoder(port=host.node, population=pop.id, code=code, split=split,
-                                node=host.node, normalize_axes=tuple(normalize_axes)))
+                                node=host.node, normalize_axes=tuple(normalize_axes),
+                                saturate=saturate))
         return pop
 
     def spike_value(self, node: str, population: Population, decoder: Decoder,

@@ -201,6 +201,10 @@ class Encoder(_Frozen):
     normalize_axes : tuple of str
         Value axes to normalise over at run time (per-input calibration, see
         :func:`normalize_values`); empty: values are encoded as given.
+    saturate : bool
+        The code's top was chosen below the calibration maximum on purpose (e.g. a
+        CFAR code at a calibration quantile < 1): values above it are part of the
+        code — clipped and counted, never refused by the out-of-range policy.
     """
 
     port: str
@@ -209,6 +213,7 @@ class Encoder(_Frozen):
     split: Split = "none"
     node: str = ""
     normalize_axes: tuple[str, ...] = ()
+    saturate: bool = False
 
 
 class Decoder(_Frozen):
