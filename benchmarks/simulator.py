@@ -23,18 +23,24 @@ replicated over ``C`` chirps with one shared weight matrix:
   latency offset ``-x_min`` and saturates, as in the paper), which makes ``b``
   dyadic.
 
-Printed: medians of ``--repeats`` runs of ``simulate(mode="step")`` and
-``mode="closed"``; Brian2 (numpy target, and cython where a C compiler works) building and
-running the same network through :mod:`backends.brian2` with ``dt = 1`` step; agreement
-of every neuron's spike step; time ratios, weight-storage ratio, and the
-numpy FFT's time and the S-FT's accuracy against it (the paper's RMSE protocol).
+Printed, all from one run and each figure the median of ``--repeats`` (≥ 5) runs:
+``simulate(mode="step")`` and ``mode="closed"`` with the plan built in each call and with a
+plan built once and reused (``plan=``; Brian2's "build" is its code generation and network
+construction); Brian2 (numpy target, and cython where a C compiler works) building and
+running the same network through :mod:`backends.brian2` with ``dt = 1`` step: build, run,
+build + run, and the time inside its code objects; agreement of every neuron's spike step;
+the ratio Brian2 / ours for every pair of readings against the goals (closed form ≥ 100×,
+step ≥ 10× Brian2's run); weight storage; the numpy FFT's time and the S-FT's accuracy
+against it (the paper's RMSE protocol); the machine's load average before and after.
+Our side runs with one BLAS thread (threadpoolctl), like Brian2's targets.
 
-Run ``python benchmarks/simulator.py [--chirps 64] [--repeats 3] [--quick]``.
+Run ``python benchmarks/simulator.py [--chirps 64] [--repeats 7] [--quick]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 from collections.abc import Callable
@@ -179,68 +185,196 @@ def c_compiler_works(b2: Any) -> bool:
         return False
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--chirps", type=int, default=64, help="chirps (repetitions), default 64")
-    parser.add_argument("--repeats", type=int, default=3, help="timed runs per engine (median)")
-    parser.add_argument("--quick", action="store_true", help="8 chirps, numpy target only")
-    args = parser.parse_args(argv)
-    chirps = 8 if args.quick else args.chirps
-    repeats = max(args.repeats, 3)
+#: Goals of issue 3: Brian2 run time / ours.
+GOALS = {"closed": 100.0, "step": 10.0}
 
+
+def load_average() -> str:
+    """The 1/5/15-minute load averages and the core count, as text."""
+    try:
+        one, five, fifteen = os.getloadavg()
+    except OSError:
+        return "load average: unavailable"
+    return f"load average {one:.2f} / {five:.2f} / {fifteen:.2f} on {os.cpu_count()} cores"
+
+
+def time_ours(net: SpikingNetwork, x: np.ndarray, repeats: int) -> dict:
+    """Median times of ``simulate`` per mode, plan built in each call and reused; results."""
     from threadpoolctl import threadpool_limits
 
     from backends.reference import build_plan, simulate
 
+    ours = {}
+    # one BLAS thread, like Brian2's numpy and cython targets: on 2 cores a multi-threaded
+    # OpenBLAS spends ~8 ms waking its threads for each of these small products
+    with threadpool_limits(limits=1):
+        plan_s, plan = median_time(lambda: build_plan(net), repeats)
+        ours["plan"] = plan_s
+        for mode in ("step", "closed"):
+            simulate(net, {"x": x}, mode=mode, plan=plan)  # warm caches once
+            times: dict[str, list[float]] = {"built": [], "reused": []}
+            for _ in range(repeats):  # interleaved: both readings see the same machine state
+                for key, given in (("built", None), ("reused", plan)):
+                    start = time.perf_counter()
+                    result = simulate(net, {"x": x}, mode=mode, plan=given)
+                    times[key].append(time.perf_counter() - start)
+            built, reused = (statistics.median(times[k]) for k in ("built", "reused"))
+            ours[mode] = {"built": built, "reused": reused, "result": result}
+            print(f"ours {mode:6s}: {built * 1e3:8.2f} ms plan built in the call, "
+                  f"{reused * 1e3:8.2f} ms plan reused (medians of {repeats}, interleaved, "
+                  "one BLAS thread)")
+    print(f"build_plan alone: {plan_s * 1e3:.2f} ms (median of {repeats})")
+    return ours
+
+
+def print_ratios(ours: dict, brian: dict) -> None:
+    """Brian2 time / ours for every reading, marking the goals (against Brian2's run)."""
+    readings = [(f"{t} {what}", r[key]) for t, r in brian.items()
+                for what, key in (("run", "run_s"), ("build+run", "total_s"),
+                                  ("code objects", "loop_s"))]
+    print("ratio Brian2 / ours (goal: closed >= 100x, step >= 10x Brian2's run):")
+    print("  " + " " * 22 + "".join(f"{name:>22s}" for name, _ in readings))
+    for mode in ("closed", "step"):
+        for plan in ("built", "reused"):
+            ratios = [seconds / ours[mode][plan] for _, seconds in readings]
+            cells = [f"{r:9.1f}x" + (" (goal met)" if name.endswith(" run") and
+                                      r >= GOALS[mode] else
+                                      " (goal missed)" if name.endswith(" run") else "")
+                     for (name, _), r in zip(readings, ratios, strict=True)]
+            print(f"  {mode + ', plan ' + plan:22s}" + "".join(f"{c:>22s}" for c in cells))
+
+
+def breakdown(net: SpikingNetwork, x: np.ndarray, repeats: int) -> None:
+    """Where the time of one ``simulate`` goes: each part timed alone (medians, one thread).
+
+    The step engine's parts are replayed outside the loop on the same data: the
+    input currents of every step (:class:`~backends.reference.delivery.TrainCurrents`),
+    their in-place additions to ``u``, and the neuron updates of the silent stage
+    (``v += u``) and of the charging stage (``v += b``, threshold test) — what
+    remains of ``run_step`` is the loop itself (ring buffers, first spikes).
+    """
+    from threadpoolctl import threadpool_limits
+
+    from backends.reference import build_plan, simulate
+    from backends.reference.closed import run_closed
+    from backends.reference.decoding import decode_outputs
+    from backends.reference.delivery import TrainCurrents
+    from backends.reference.encoding import encode_inputs
+    from backends.reference.neuron import LiveNeurons
+    from backends.reference.step import run_step
+
+    plan = build_plan(net)
+    trains, n_frames, framed = encode_inputs(net, {"x": x})
+    dl, params = plan.deliveries["dft"], plan.neurons["sft"]
+    flat, steps = trains["adc"].all_events()
+    n, window = net.population["sft"].size * n_frames, net.n_steps // 2
+
+    def currents() -> list:
+        ahead = TrainCurrents(dl, 0, 0, flat, steps, n_frames, net.n_steps)
+        return [ahead.at(t) for t in range(window)]
+
+    rows = [r for r in currents() if r is not None]
+    u = np.zeros(n)
+
+    def add_all() -> None:
+        for hit, part in rows:
+            dl.add_rows(hit, part, u)
+
+    def stage(start: int, stop: int, v0: np.ndarray, u0: float) -> Callable[[], None]:
+        def run() -> None:
+            live = LiveNeurons(params, n)
+            live.v[:] = v0
+            if u0:
+                live.u[:], live._u_zero = u0, False
+            for t in range(start, stop):
+                live.step(t, [], None)
+        return run
+
+    closed = run_closed(plan, trains, n_frames)
+    parts = {
+        "simulate(step), plan reused": lambda: simulate(net, {"x": x}, mode="step", plan=plan),
+        "  run_step (the engine alone)": lambda: run_step(plan, trains, n_frames),
+        "    input currents, all steps (TrainCurrents)": currents,
+        "    u += currents (add_rows), all steps": add_all,
+        "    silent stage neuron updates (v += u)": stage(0, window, np.zeros(n), 1.0),
+        "    charging stage (v += b, threshold)":  # from the membranes after the silent stage
+            stage(window, net.n_steps, closed.membrane["sft"].ravel() - window * net.meta["bias"],
+                  0.0),
+        "  encode_inputs": lambda: encode_inputs(net, {"x": x}),
+        "  decode_outputs": lambda: decode_outputs(net, closed, framed),
+        "simulate(closed), plan reused": lambda: simulate(net, {"x": x}, mode="closed",
+                                                          plan=plan),
+        "  run_closed (the engine alone)": lambda: run_closed(plan, trains, n_frames),
+        "build_plan": lambda: build_plan(net),
+    }
+    print(f"breakdown (medians of {repeats}, one BLAS thread; parts timed alone):")
+    with threadpool_limits(limits=1):
+        for name, fn in parts.items():
+            seconds, _ = median_time(fn, repeats)
+            print(f"  {name:48s} {seconds * 1e3:8.2f} ms")
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--chirps", type=int, default=64, help="chirps (repetitions), default 64")
+    parser.add_argument("--repeats", type=int, default=7,
+                        help="timed runs per figure (median), at least 5")
+    parser.add_argument("--quick", action="store_true", help="8 chirps, numpy target only")
+    parser.add_argument("--breakdown", action="store_true",
+                        help="also time the parts of one simulate call")
+    args = parser.parse_args(argv)
+    chirps = 8 if args.quick else args.chirps
+    repeats = max(args.repeats, 5)
+
+    from backends.reference import build_plan
+
+    print(f"before: {load_average()}")
     x = chirp_matrix(chirps)
     net = sft_network(x)
     print(f"network: {chirps} chirps x {N_SAMPLES} samples -> {net.n_neurons} neurons, "
           f"{net.n_synapses} stored synapses ({net.n_synapse_instances()} instances), "
           f"{net.n_steps} steps, v_th={net.meta['v_th']:g}, bias={net.meta['bias']:g}")
-    ours = {}
-    # one BLAS thread, like Brian2's numpy and cython targets: on 2 cores a multi-threaded
-    # OpenBLAS spends ~8 ms waking its threads for each of these small products
-    with threadpool_limits(limits=1):
-        for mode in ("step", "closed"):
-            seconds, result = median_time(lambda m=mode: simulate(net, {"x": x}, mode=m),
-                                          repeats)
-            ours[mode] = (seconds, result)
-            print(f"ours {mode:6s}: {seconds * 1e3:9.1f} ms (median of {repeats}, one BLAS "
-                  "thread, plan built in each run)")
-    first = ours["step"][1].first_spike_steps["sft"].reshape(-1)
-    same_modes = np.array_equal(first, ours["closed"][1].first_spike_steps["sft"].reshape(-1))
+    ours = time_ours(net, x, repeats)
+    first = ours["step"]["result"].first_spike_steps["sft"].reshape(-1)
+    same_modes = np.array_equal(first, ours["closed"]["result"].first_spike_steps["sft"].ravel())
     print(f"step vs closed spike steps identical: {same_modes}")
     fft_s, ref = median_time(lambda: np.fft.rfft(x, axis=-1)[:, :N_SAMPLES // 2], 20 * repeats)
-    y = ours["step"][1].outputs["y"]
-    print(f"numpy rfft: {fft_s * 1e3:.3f} ms; closed / fft = {ours['closed'][0] / fft_s:.0f}x, "
-          f"step / fft = {ours['step'][0] / fft_s:.0f}x slower; S-FT RMSE vs FFT (paper "
-          f"protocol, bins 1..{N_SAMPLES // 2 - 1}) = {paper_rmse(y, ref):.4f}")
+    y = ours["step"]["result"].outputs["y"]
+    print(f"numpy rfft: {fft_s * 1e3:.3f} ms; closed / fft = "
+          f"{ours['closed']['reused'] / fft_s:.0f}x, step / fft = "
+          f"{ours['step']['reused'] / fft_s:.0f}x slower (plans reused); S-FT RMSE vs FFT "
+          f"(paper protocol, bins 1..{N_SAMPLES // 2 - 1}) = {paper_rmse(y, ref):.4f}")
     plan_bytes = build_plan(net).weight_nbytes
     print(f"our weight storage (plan): {plan_bytes / 2**20:.2f} MiB")
+    if args.breakdown:
+        breakdown(net, x, repeats)
 
     b2 = brian2_or_none()
     if b2 is None:
+        print(f"after: {load_average()}")
         return
     b2.BrianLogger.log_level_warn()
     targets = ["numpy"] + ([] if args.quick else ["cython"] if c_compiler_works(b2) else [])
     print(f"brian2 {b2.__version__} with numpy {np.__version__}; targets: {targets}")
+    brian = {}
     for target in targets:
         warm = run_brian2(b2, net, x, target)  # cython compiles here; numpy warms caches
         runs = [run_brian2(b2, net, x, target) for _ in range(repeats)]
-        run_s = statistics.median(r["run_s"] for r in runs)
-        build_s = statistics.median(r["build_s"] for r in runs)
-        loop_s = statistics.median(r["loop_s"] for r in runs)
+        brian[target] = {
+            "build_s": statistics.median(r["build_s"] for r in runs),
+            "run_s": statistics.median(r["run_s"] for r in runs),
+            "total_s": statistics.median(r["build_s"] + r["run_s"] for r in runs),
+            "loop_s": statistics.median(r["loop_s"] for r in runs)}
+        b = brian[target]
         agree = float(np.mean(runs[-1]["first"] == first))
-        print(f"brian2 {target}: build {build_s:.2f} s, run {run_s:.2f} s of which code objects "
-              f"{loop_s:.2f} s (medians of {repeats}; "
+        print(f"brian2 {target}: build {b['build_s']:.3f} s, run {b['run_s']:.3f} s, build+run "
+              f"{b['total_s']:.3f} s, code objects {b['loop_s']:.3f} s (medians of {repeats}; "
               f"first run {warm['build_s'] + warm['run_s']:.2f} s); {runs[-1]['n_synapses']} "
               f"synapses (no sharing), {runs[-1]['synapse_bytes'] / 2**20:.1f} MiB synapse "
               f"arrays = {runs[-1]['synapse_bytes'] / plan_bytes:.0f}x our weight storage")
         print(f"  spike-step agreement with ours: {agree:.4%} of {first.size} neurons")
-        for mode in ("closed", "step"):
-            loop, run, total = (s / ours[mode][0] for s in (loop_s, run_s, run_s + build_s))
-            print(f"  ours {mode} vs brian2 {target}: {run:.1f}x faster than its run "
-                  f"({loop:.1f}x its code objects, {total:.1f}x build + run)")
+    print_ratios(ours, brian)
+    print(f"after: {load_average()}")
 
 
 if __name__ == "__main__":

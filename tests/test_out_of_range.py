@@ -159,7 +159,10 @@ def _program():
          "alpha": 1.5},
         {"id": "o", "op": "output", "input": "c"}]})
     x = np.linspace(0.1, 1.0, 8)
-    return compile_graph(g, target="loihi2", calibration_inputs={"a": x}), x
+    # the CFAR code topped at the calibration maximum: not a saturating code
+    # (tests/test_saturating_codes.py), so values above it are the policy's to judge
+    return compile_graph(g, target="loihi2", calibration_inputs={"a": x},
+                         options={"cfar_quantiles": {"ca": [0.0, 1.0]}}), x
 
 
 def test_run_program_applies_the_policy_to_the_callers_values():

@@ -60,10 +60,14 @@ class LatencyTrain:
     @classmethod
     def build(cls, code: LatencyCode, values: np.ndarray, n_steps: int) -> LatencyTrain:
         """Spike steps of ``values`` (shape ``(frames, size)``) under ``code``."""
+        limit = min(code.t_max, n_steps)
         steps = code.spike_steps(values).ravel()
-        flat = np.flatnonzero(steps < min(code.t_max, n_steps))
-        order = order_by_step(steps[flat], n_steps)
-        flat, steps = flat[order], steps[flat][order]
+        flat = np.flatnonzero(steps < limit)
+        steps = steps[flat]
+        # stable by step (ties by index): a one-pass radix sort when steps fit a byte
+        order = (np.argsort(steps.astype(np.uint8), kind="stable") if limit <= 256
+                 else order_by_step(steps, n_steps))
+        flat, steps = flat[order], steps[order]
         return cls(flat, steps, np.searchsorted(steps, np.arange(n_steps + 1)))
 
     def events_at(self, t: int) -> np.ndarray:

@@ -7,10 +7,20 @@ column = the flattened ``contract`` index — and the current is
 .. math:: I = E\,W_k \quad\text{reshaped to } (n_{batch}, \text{reps}, \text{produce})
           \text{ and permuted into the target's axis order,}
 
-an event-driven product that reads only the weight rows of spiking inputs;
-each output sums its rows in ascending column order.  ``W`` is stored once per
-delay class (a dense projection without delays keeps its own array), never
-tiled over repetitions; repetition axes are matched by name.
+an event-driven product that reads only the weight rows of spiking inputs.
+``W`` is stored once per delay class (a dense projection without delays keeps
+its own array), never tiled over repetitions; repetition axes are matched by name.
+
+Arithmetic of the gathering path (the one both engines share for unweighted
+events): the events of one batch row, in the order given, contribute their
+weight rows ``w_1, …, w_m`` and the row's current is exactly what
+``np.add.reduceat`` gives for that run of rows, ``w_1 + ((w_2 + w_3) + … + w_m)``
+for ``m ≤ 8`` (numpy sums the tail of a reduction from its first element, in
+order, below 8 addends) and ``np.add.reduceat`` itself for longer runs.
+:func:`grouped_sums` evaluates it level by level (all rows' ``k``-th events at
+once) instead of one tiny reduction per row and column.
+:meth:`MatrixDelivery.add_to` adds the current into a flat state array touching
+only the rows hit.
 """
 
 from __future__ import annotations
@@ -89,6 +99,11 @@ class MatrixDelivery:
     #: Per delay class, the sign-symmetric factor of a dense float matrix when it saves at
     #: least half the multiply-adds of the dense whole-batch product (else None).
     factors: tuple[SignedFactor | None, ...] = ()
+    #: ``(n_reps, n_out)`` flat target index (within one batch row) of each block entry, or
+    #: None when the block order is the target order (repetition axes first, then produce).
+    target_index: np.ndarray | None = None
+    #: Per delay class, the synapses of each source neuron (int64, source size).
+    source_synapses: tuple[np.ndarray, ...] = ()
 
     @classmethod
     def build(
@@ -142,13 +157,15 @@ class MatrixDelivery:
                   if proj.contract else np.zeros(src.size, np.int64))
         block_axes = rep_axes + proj.produce
         factors = tuple(_worth_factoring(w, integer) for w in weights)
+        to_target = tuple(block_axes.index(a) for a in tgt.axes)
+        block_shape = rep_dims + tuple(tgt.shape[a] for a in proj.produce)
         return cls(
             id=proj.id, source=proj.source, target=proj.target, delays=delays, weights=weights,
             row_synapses=row_synapses, rep_of=rep_of.astype(np.int64),
             col_of=col_of.astype(np.int64), n_reps=prod(rep_dims), n_in=proj.n_in,
-            n_out=proj.n_out, block_shape=rep_dims + tuple(tgt.shape[a] for a in proj.produce),
-            to_target=tuple(block_axes.index(a) for a in tgt.axes), integer=integer,
-            factors=factors,
+            n_out=proj.n_out, block_shape=block_shape, to_target=to_target, integer=integer,
+            factors=factors, target_index=_target_index(block_shape, to_target, proj.n_out),
+            source_synapses=tuple(r[col_of].astype(np.int64) for r in row_synapses),
         )
 
     @property
@@ -170,70 +187,299 @@ class MatrixDelivery:
         ``values`` (default 1 per event) scales each event, which the closed form
         uses to weight arrivals by their remaining steps.
         """
-        n_src = self.col_of.size
-        b, n = np.divmod(events, n_src)
-        rows = b * self.n_reps + self.rep_of[n]
+        dtype = np.int64 if self.integer else np.float64
+        hit, part = self._row_sums(k, events, n_batch, values)
+        if hit is None:  # the whole batch came out dense
+            block = part
+        else:
+            full = np.zeros((n_batch * self.n_reps, self.n_out), dtype)
+            full[hit] = part
+            block = full
+        block = block.reshape(n_batch, *self.block_shape)
+        return block.transpose(0, *(1 + a for a in self.to_target))
+
+    def add_to(self, k: int, events: np.ndarray, n_batch: int, out: np.ndarray) -> None:
+        """``out += current(k, events, n_batch)`` in place, touching only the rows hit.
+
+        ``out`` is the flat ``(n_batch * target size)`` array of the target (the
+        delivery's dtype).  Where ``out`` holds no negative zero the result is
+        bit-identical to ``out + current(...)`` (adding ``+0.0`` to the rows not
+        hit changes nothing else).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import MatrixProjection, Population
+        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
+        ...                      produce=("o",), weights=np.array([[1.0, 2.0], [4.0, 8.0]]))
+        >>> a = Population(id="a", shape={"r": 2, "i": 2}, source=True)
+        >>> d = MatrixDelivery.build(p, a, Population(id="b", shape={"o": 2, "r": 2}))
+        >>> out = np.full(4, 0.5)
+        >>> d.add_to(0, np.array([2, 3]), 1, out)  # rep 1, both inputs: 1 + 4, 2 + 8
+        >>> out.tolist()
+        [0.5, 5.5, 0.5, 10.5]
+        """
+        hit, part = self._row_sums(k, events, n_batch, None)
+        if hit is None:
+            block = part.reshape(n_batch, *self.block_shape)
+            out += block.transpose(0, *(1 + a for a in self.to_target)).reshape(-1)
+        else:
+            self.add_rows(hit, part, out)
+
+    @property
+    def rows_independent(self) -> bool:
+        """Whether a batch row's current depends on that row's events alone.
+
+        True for the gathering path (dense weights, no BLAS one-hot products):
+        then the currents of many steps can be computed in one batch, bit for bit
+        as step by step (:class:`~backends.reference.delivery.TrainCurrents`).
+        """
+        return not self.blas_events and not any(sp.issparse(w) for w in self.weights)
+
+    def row_currents(self, k: int, events: np.ndarray, n_batch: int,
+                     workspace: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(rows hit, their (rows, n_out) currents)`` of unweighted events (``rows_independent``).
+
+        ``workspace`` (``(≥ events, n_out)``, the delivery's dtype) is gathered
+        into when given (see :func:`grouped_sums`); the currents may then be a view of it.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import MatrixProjection, Population
+        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
+        ...                      produce=("o",), weights=np.array([[1.0, 2.0], [4.0, 8.0]]))
+        >>> d = MatrixDelivery.build(p, Population(id="a", shape={"i": 2}, source=True),
+        ...                          Population(id="b", shape={"o": 2}))
+        >>> [a.tolist() for a in d.row_currents(0, np.array([0, 1, 3]), 2)]
+        [[0, 1], [[5.0, 10.0], [4.0, 8.0]]]
+        """
+        hit, part = self._row_sums(k, events, n_batch, None, workspace)
+        if hit is None:  # not rows_independent: dense block
+            return np.arange(part.shape[0]), part
+        return hit, part
+
+    def event_rows(self, events: np.ndarray, n_batch: int) -> tuple[np.ndarray, np.ndarray]:
+        """The batch row ``b·n_reps + rep`` and the matrix row (``col_of``) of each event.
+
+        Events are flat indices into ``(n_batch, *source_shape)``; with
+        ``n_batch == 1`` no division is needed.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import MatrixProjection, Population
+        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
+        ...                      produce=("o",), weights=np.ones((2, 1)))
+        >>> a = Population(id="a", shape={"i": 2, "r": 3}, source=True)
+        >>> d = MatrixDelivery.build(p, a, Population(id="b", shape={"r": 3, "o": 1}))
+        >>> [a.tolist() for a in d.event_rows(np.array([1, 3, 6]), n_batch=2)]
+        [[1, 0, 3], [0, 1, 0]]
+        """
+        if n_batch == 1:
+            return self.rep_of[events], self.col_of[events]
+        b, n = np.divmod(events, self.col_of.size)
+        return b * self.n_reps + self.rep_of[n], self.col_of[n]
+
+    def add_rows(self, hit: np.ndarray, part: np.ndarray, out: np.ndarray) -> None:
+        """``out[target of row r] += part[r]`` for the (distinct) block rows ``hit``, in place."""
+        if self.target_index is None:  # blocks are already in target order
+            out.reshape(-1, self.n_out)[hit] += part
+        else:
+            b, rep = np.divmod(hit, self.n_reps)
+            out[(b * (self.n_reps * self.n_out))[:, None] + self.target_index[rep]] += part
+
+    def _row_sums(
+        self, k: int, events: np.ndarray, n_batch: int, values: np.ndarray | None,
+        workspace: np.ndarray | None = None,
+    ) -> tuple[np.ndarray | None, np.ndarray]:
+        """``(hit rows, their currents)``, or ``(None, dense (rows, n_out) block)``."""
+        rows, cols = self.event_rows(events, n_batch)
         dtype = np.int64 if self.integer else np.float64
         weights = self.weights[k]
         if sp.issparse(weights):
             hit, local = np.unique(rows, return_inverse=True)
             data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
-            one_hot = sp.csr_matrix((data, (local.ravel(), self.col_of[n])),
-                                    shape=(hit.size, self.n_in))
+            one_hot = sp.csr_matrix((data, (local.ravel(), cols)), shape=(hit.size, self.n_in))
             one_hot.sum_duplicates()
-            part = (one_hot @ weights).toarray()
-        elif ((values is not None or self.blas_events) and not self.integer
-              and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in):
+            return hit, (one_hot @ weights).toarray()
+        if ((values is not None or self.blas_events) and not self.integer
+                and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in):
             # dense over the whole batch (the closed form's silent stage): one-hot over every
             # row by one bincount (events added in order), one BLAS product, no sorting
             n_rows = n_batch * self.n_reps
             data = None if values is None else values.astype(dtype)
             factor = self.factors[k] if self.factors else None
             if factor is not None:  # fold ±-symmetric parts first: a smaller core product
-                cols = self.col_of[n]
                 signed = factor.in_sign[cols] if data is None else data * factor.in_sign[cols]
                 n_core = factor.core.shape[0]
                 one_hot = np.bincount(rows * n_core + factor.in_row[cols], weights=signed,
                                       minlength=n_rows * n_core).reshape(n_rows, n_core)
                 product = (one_hot @ factor.core)[:, factor.out_col] * factor.out_sign
             else:
-                one_hot = np.bincount(rows * self.n_in + self.col_of[n], weights=data,
+                one_hot = np.bincount(rows * self.n_in + cols, weights=data,
                                       minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
                 product = one_hot @ weights
-            block = product.astype(dtype, copy=False).reshape(n_batch, *self.block_shape)
-            return block.transpose(0, *(1 + a for a in self.to_target))
-        else:
+            return None, product.astype(dtype, copy=False)
+        if rows.size > 1 and (rows[1:] < rows[:-1]).any():
             order = np.argsort(rows, kind="stable")
-            rows, cols = rows[order], self.col_of[n[order]]
-            starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if rows.size else rows
+            rows, cols = rows[order], cols[order]
+            values = None if values is None else values[order]
+        data = None if values is None else values.astype(dtype)
+        blas = data is not None or self.blas_events
+        if blas and events.size * _DENSE_EVENTS_PER_ROW >= self.n_in * _n_runs(rows):
+            # dense: a one-hot block and one BLAS product.  Only for the closed form's
+            # weighted features, or networks the closed form cannot run: otherwise the
+            # step engine and the closed form's driven path both gather, adding every
+            # row's weights in the same order, bit for bit.
+            starts = run_starts(rows)
             hit = rows[starts]
-            data = None if values is None else values[order].astype(dtype)
-            blas = data is not None or self.blas_events
-            if blas and events.size * _DENSE_EVENTS_PER_ROW >= hit.size * self.n_in:
-                # dense: a one-hot block and one BLAS product.  Only for the closed form's
-                # weighted features, or networks the closed form cannot run: otherwise the
-                # step engine and the closed form's driven path both gather, adding every
-                # row's weights in the same order, bit for bit.
-                local = np.repeat(np.arange(hit.size), np.diff(np.r_[starts, rows.size]))
-                if self.integer:
-                    one_hot = np.zeros((hit.size, self.n_in), dtype)
-                    np.add.at(one_hot, (local, cols), 1 if data is None else data)
-                else:  # bincount adds in event order, like add.at, but much faster
-                    one_hot = np.bincount(local * self.n_in + cols, weights=data,
-                                          minlength=hit.size * self.n_in)
-                    one_hot = one_hot.reshape(hit.size, self.n_in)
-                part = one_hot @ weights
-            else:  # sparse in time: gather each event's weight row, add them per target row
-                gathered = weights[cols]
-                if data is not None:
-                    gathered = gathered * data[:, None]
-                part = np.add.reduceat(gathered, starts, axis=0) if rows.size else gathered
-        full = np.zeros((n_batch * self.n_reps, self.n_out), dtype)
-        full[hit] = part
-        block = full.reshape(n_batch, *self.block_shape)
-        return block.transpose(0, *(1 + a for a in self.to_target))
+            local = np.repeat(np.arange(hit.size), np.diff(np.append(starts, rows.size)))
+            if self.integer:
+                one_hot = np.zeros((hit.size, self.n_in), dtype)
+                np.add.at(one_hot, (local, cols), 1 if data is None else data)
+            else:  # bincount adds in event order, like add.at, but much faster
+                one_hot = np.bincount(local * self.n_in + cols, weights=data,
+                                      minlength=hit.size * self.n_in)
+                one_hot = one_hot.reshape(hit.size, self.n_in)
+            return hit, one_hot @ weights
+        # sparse in time: gather each event's weight row, add them per target row
+        return grouped_sums(weights, cols, rows, data, workspace)
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
-        n = events % self.col_of.size
-        return int(self.row_synapses[k][self.col_of[n]].sum())
+        return int(self.source_synapses[k][events % self.col_of.size].sum())
+
+    def synapses_per_source(self, k: int) -> np.ndarray:
+        """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""
+        return self.source_synapses[k]
+
+
+#: Runs of more addends than this are summed by ``np.add.reduceat`` itself (numpy's pairwise
+#: summation is sequential only below 8 tail addends).
+SEQUENTIAL_MAX = 8
+
+
+def _target_index(
+    block_shape: tuple[int, ...], to_target: tuple[int, ...], n_out: int
+) -> np.ndarray | None:
+    """Flat target index of each ``(rep, out)`` block entry; None for the identity layout."""
+    if to_target == tuple(range(len(to_target))):
+        return None
+    size = prod(block_shape)
+    # the block transposed into target order, read in target (C) order, is block index by
+    # target position: invert it
+    block_of_target = np.arange(size).reshape(block_shape).transpose(to_target).reshape(-1)
+    index = np.empty(size, np.int64)
+    index[block_of_target] = np.arange(size)
+    return index.reshape(-1, n_out)
+
+
+def run_starts(rows: np.ndarray) -> np.ndarray:
+    """Positions where a run of equal values in ``rows`` (sorted) begins.
+
+    Examples
+    --------
+    >>> run_starts(np.array([2, 2, 5, 7, 7, 7])).tolist()
+    [0, 2, 3]
+    """
+    new = np.empty(rows.size, bool)
+    new[:1] = True
+    np.not_equal(rows[1:], rows[:-1], out=new[1:])
+    return new.nonzero()[0]
+
+
+def _n_runs(rows: np.ndarray) -> int:
+    """Number of runs of equal values in ``rows`` (sorted)."""
+    return int(np.count_nonzero(rows[1:] != rows[:-1])) + 1 if rows.size else 0
+
+
+def grouped_sums(
+    table: np.ndarray, index: np.ndarray, rows: np.ndarray, scale: np.ndarray | None = None,
+    workspace: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Sum the table rows ``table[index[i]]`` (times ``scale[i]``) over each run of equal ``rows``.
+
+    Bit for bit what ``np.add.reduceat(table[index] * scale[:, None], run starts,
+    axis=0)`` returns, without its per-run, per-column inner loops: a run of
+    ``m ≤ 8`` addends ``w_1 … w_m`` is ``w_1 + (((w_2 + w_3) + w_4) + …)``
+    (numpy's reduction starts from the first element and adds the tail in order
+    below 8 tail addends); longer runs go through ``np.add.reduceat``.  The run
+    heads ``w_1`` are gathered in run order; the tails are summed level by level
+    (the ``j``-th addend of every run at once, runs ordered by decreasing length
+    so that each level is one contiguous slice) and added to their heads.
+
+    Parameters
+    ----------
+    table : ndarray
+        ``(n_table, n_out)`` rows to gather (float64 or int64).
+    index : ndarray of int
+        Table row per addend.
+    rows : ndarray of int
+        Output row per addend, sorted ascending (equal values form a run).
+    scale : ndarray, optional
+        Factor per addend (of the table's dtype).
+    workspace : ndarray, optional
+        A ``(≥ rows.size, n_out)`` array of the table's dtype to gather into
+        (reused across calls: fresh large arrays cost page faults); ``sums`` is
+        then a view of it.
+
+    Returns
+    -------
+    hit : ndarray
+        The distinct ``rows``, ascending.
+    sums : ndarray
+        ``(hit.size, n_out)`` sums.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.array([[1.0, 2.0], [10.0, 20.0], [100.0, 200.0]])
+    >>> hit, sums = grouped_sums(t, np.array([0, 1, 2, 2]), np.array([3, 5, 5, 5]))
+    >>> hit.tolist(), sums.tolist()
+    ([3, 5], [[1.0, 2.0], [210.0, 420.0]])
+    >>> r = np.random.default_rng(0).standard_normal((12, 3))
+    >>> rows = np.repeat([0, 1, 2], [1, 5, 6])
+    >>> bool(np.all(grouped_sums(r, np.arange(12), rows)[1]
+    ...             == np.add.reduceat(r, [0, 1, 6], axis=0)))
+    True
+    """
+    def gather(at: np.ndarray, offset: int = 0) -> np.ndarray:
+        """``table[index[at]] * scale[at]``, into the workspace from ``offset`` if given."""
+        got = np.take(table, index[at], axis=0,
+                      out=None if workspace is None else workspace[offset:offset + at.size])
+        if scale is not None:
+            np.multiply(got, scale[at][:, None], out=got)
+        return got
+
+    starts = run_starts(rows) if rows.size else rows
+    sums = gather(starts)  # the run heads
+    if starts.size == rows.size:  # one addend per run
+        return rows, sums
+    counts = np.empty_like(starts)
+    counts[:-1] = starts[1:] - starts[:-1]
+    counts[-1] = rows.size - starts[-1]
+    multi = (counts > 1).nonzero()[0]
+    order = np.argsort(-counts[multi], kind="stable")  # longest runs first
+    owner = multi[order]  # the run (index into sums) of each tail
+    length, first = counts[owner], starts[owner]
+    depth = min(int(length[0]), SEQUENTIAL_MAX)
+    level = np.arange(1, depth)
+    # n_at[j - 1]: runs with more than j addends; tail addends taken level by level
+    n_at = np.count_nonzero(length[None, :] > level[:, None], axis=1)
+    tails = gather((first[:, None] + level).T[level[:, None] < length[None, :]], starts.size)
+    ends = np.cumsum(n_at)
+    tail = tails[:n_at[0]]
+    for j in range(1, depth - 1):
+        tail[:n_at[j]] += tails[ends[j - 1]:ends[j]]
+    sums[owner] += tail
+    deep = int(np.count_nonzero(length > SEQUENTIAL_MAX))
+    if deep:  # long runs: numpy's own pairwise reduction
+        lengths = length[:deep]
+        begin = np.cumsum(lengths) - lengths  # where each long run starts in `run`
+        run = np.repeat(first[:deep] - begin, lengths) + np.arange(int(lengths.sum()))
+        long = table[index[run]]
+        if scale is not None:
+            long = long * scale[run][:, None]
+        sums[owner[:deep]] = np.add.reduceat(long, begin, axis=0)
+    return rows[starts], sums
