@@ -99,6 +99,9 @@ class MatrixDelivery:
     #: Per delay class, the sign-symmetric factor of a dense float matrix when it saves at
     #: least half the multiply-adds of the dense whole-batch product (else None).
     factors: tuple[SignedFactor | None, ...] = ()
+    #: Per delay class with a factor, per source neuron: its slot ``rep·n_core + in_row`` in
+    #: the folded one-hot block of one batch row, and its ``in_sign`` (else None).
+    factor_slots: tuple[tuple[np.ndarray, np.ndarray] | None, ...] = ()
     #: ``(n_reps, n_out)`` flat target index (within one batch row) of each block entry, or
     #: None when the block order is the target order (repetition axes first, then produce).
     target_index: np.ndarray | None = None
@@ -165,6 +168,9 @@ class MatrixDelivery:
             col_of=col_of.astype(np.int64), n_reps=prod(rep_dims), n_in=proj.n_in,
             n_out=proj.n_out, block_shape=block_shape, to_target=to_target, integer=integer,
             factors=factors, target_index=_target_index(block_shape, to_target, proj.n_out),
+            factor_slots=tuple(None if f is None else (
+                (rep_of * f.core.shape[0] + f.in_row[col_of]).astype(np.int64),
+                f.in_sign[col_of]) for f in factors),
             source_synapses=tuple(r[col_of].astype(np.int64) for r in row_synapses),
         )
 
@@ -294,33 +300,27 @@ class MatrixDelivery:
         workspace: np.ndarray | None = None,
     ) -> tuple[np.ndarray | None, np.ndarray]:
         """``(hit rows, their currents)``, or ``(None, dense (rows, n_out) block)``."""
-        rows, cols = self.event_rows(events, n_batch)
         dtype = np.int64 if self.integer else np.float64
         weights = self.weights[k]
+        dense = ((values is not None or self.blas_events) and not self.integer
+                 and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in)
+        if dense and not sp.issparse(weights) and self.factors and self.factors[k] is not None:
+            return None, self._folded_product(k, events, n_batch, values)
+        rows, cols = self.event_rows(events, n_batch)
         if sp.issparse(weights):
             hit, local = np.unique(rows, return_inverse=True)
             data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
             one_hot = sp.csr_matrix((data, (local.ravel(), cols)), shape=(hit.size, self.n_in))
             one_hot.sum_duplicates()
             return hit, (one_hot @ weights).toarray()
-        if ((values is not None or self.blas_events) and not self.integer
-                and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in):
+        if dense:
             # dense over the whole batch (the closed form's silent stage): one-hot over every
             # row by one bincount (events added in order), one BLAS product, no sorting
             n_rows = n_batch * self.n_reps
             data = None if values is None else values.astype(dtype)
-            factor = self.factors[k] if self.factors else None
-            if factor is not None:  # fold ±-symmetric parts first: a smaller core product
-                signed = factor.in_sign[cols] if data is None else data * factor.in_sign[cols]
-                n_core = factor.core.shape[0]
-                one_hot = np.bincount(rows * n_core + factor.in_row[cols], weights=signed,
-                                      minlength=n_rows * n_core).reshape(n_rows, n_core)
-                product = (one_hot @ factor.core)[:, factor.out_col] * factor.out_sign
-            else:
-                one_hot = np.bincount(rows * self.n_in + cols, weights=data,
-                                      minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
-                product = one_hot @ weights
-            return None, product.astype(dtype, copy=False)
+            one_hot = np.bincount(rows * self.n_in + cols, weights=data,
+                                  minlength=n_rows * self.n_in).reshape(n_rows, self.n_in)
+            return None, (one_hot @ weights).astype(dtype, copy=False)
         if rows.size > 1 and (rows[1:] < rows[:-1]).any():
             order = np.argsort(rows, kind="stable")
             rows, cols = rows[order], cols[order]
@@ -345,6 +345,29 @@ class MatrixDelivery:
             return hit, one_hot @ weights
         # sparse in time: gather each event's weight row, add them per target row
         return grouped_sums(weights, cols, rows, data, workspace)
+
+    def _folded_product(self, k: int, events: np.ndarray, n_batch: int,
+                        values: np.ndarray | None) -> np.ndarray:
+        """The dense whole-batch product through the sign-symmetric factor of class ``k``.
+
+        The ±-symmetric input rows are folded first (one bincount onto the core's rows,
+        signs applied, events added in order), then one smaller BLAS product with the
+        core, whose columns are spread back with their signs.
+        """
+        factor, (slot, sign) = self.factors[k], self.factor_slots[k]
+        n_core = factor.core.shape[0]
+        if n_batch == 1:
+            index, signed = slot[events], sign[events]
+        else:
+            b, n = np.divmod(events, self.col_of.size)
+            index, signed = b * (self.n_reps * n_core) + slot[n], sign[n]
+        if values is not None:
+            signed = signed * values
+        one_hot = np.bincount(index, weights=signed, minlength=n_batch * self.n_reps * n_core)
+        product = one_hot.reshape(-1, n_core) @ factor.core
+        out = np.take(product, factor.out_col, axis=1)
+        out *= factor.out_sign
+        return out
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""

@@ -73,16 +73,28 @@ def charge(
         top = end if b > 0 else np.maximum(v + b, end)
         idle = np.flatnonzero((top >= params.v_th) & (first < 0))
         w = v[idle]
-        if b > 0:
+        if b > 0 and not params.integer:  # k stays float (whole numbers), ops in place
+            k = params.v_th - w
+            k /= b
+            np.ceil(k, out=k)
+            np.clip(k, 1, n + 1, out=k)
+            # the rounding checks: the first k with w + k b >= v_th, as the steps add it
+            probe = k - 1
+            probe *= b
+            probe += w
+            k -= (k > 1) & (probe >= params.v_th)
+            np.multiply(k, b, out=probe)
+            probe += w
+            k += probe < params.v_th
+        elif b > 0:
             gap = params.v_th - w
-            k = -((-gap) // b) if params.integer else np.ceil(gap / b)
-            k = np.clip(k, 1, n + 1).astype(np.int64)
+            k = np.clip(-((-gap) // b), 1, n + 1).astype(np.int64)
             k = np.where((k > 1) & (w + (k - 1) * b >= params.v_th), k - 1, k)
             k = np.where(w + k * b < params.v_th, k + 1, k)
         else:
             k = np.where(w + b >= params.v_th, 1, n + 1)
         hit = k <= n
-        first[idle[hit]] = seg.start + k[hit] - 1
+        first[idle[hit]] = seg.start + k[hit].astype(np.int64) - 1
     return np.zeros_like(v), end
 
 

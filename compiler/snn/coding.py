@@ -341,11 +341,21 @@ class Decoder(_Frozen):
         >>> d.table_values(np.array([10, 11, 12, -1])).tolist()
         [2.0, 0.5, -1.0, -1.0]
         """
-        k = np.asarray(first_spike, dtype=np.int64) - int(self.t_ref)
-        inside = (np.asarray(first_spike) >= 0) & (k >= 0) & (k < len(self.table))
-        table = np.asarray(self.table, dtype=np.float64)
-        value = self.scale * table[np.clip(k, 0, len(table) - 1)] + self.offset
-        return np.where(inside, value / gains, self.missing)
+        n = len(self.table)
+        # one lookup in [missing, scale·table + offset, missing]: index 0 for no spike (or a
+        # step before t_ref), n + 1 for a step past the table
+        ext = np.empty(n + 2)
+        ext[0] = ext[-1] = self.missing
+        ext[1:-1] = self.scale * np.asarray(self.table, dtype=np.float64) + self.offset
+        first = np.asarray(first_spike, dtype=np.int64)
+        index = first - (int(self.t_ref) - 1)
+        if int(self.t_ref) < 0:  # else no spike (-1) lands at or below 0 anyway
+            index[first < 0] = 0
+        np.clip(index, 0, n + 1, out=index)
+        value = ext[index]
+        if np.isscalar(gains) and gains == 1.0:
+            return value
+        return np.where((index > 0) & (index <= n), value / gains, value)
 
 
 def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
