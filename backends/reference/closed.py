@@ -28,40 +28,14 @@ import numpy as np
 from backends.reference.encoding import Train
 from backends.reference.gate import gate_inputs, is_gated_segment, solve_gated
 from backends.reference.order import first_spike_steps, order_by_step
-from backends.reference.plan import SimPlan
+from backends.reference.plan import SimPlan, closed_form_problems
 from backends.reference.result import Activity
 from backends.reference.segments import Arrivals, charge, driven, silent
-from compiler.snn.network import SpikingNetwork
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 
 #: Default cap on one driven block's drive histogram (bytes).
 BLOCK_BYTES = 8 << 20
-
-
-def closed_form_problems(network: SpikingNetwork) -> list[str]:
-    """Why the closed form cannot simulate ``network`` (empty when it can).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from compiler.snn import NeuronParams, Population, SpikingNetwork
-    >>> net = SpikingNetwork(name="n", n_steps=4, populations=[
-    ...     Population(id="a", shape={"i": 1}, params=NeuronParams(reset="subtract"))])
-    >>> closed_form_problems(net)
-    ["population 'a' has reset='subtract'; the closed form needs reset='fire_once'"]
-    """
-    problems = [f"population {p.id!r} has reset={p.params.reset!r}; the closed form needs "
-                "reset='fire_once'"
-                for p in network.populations if not p.source and p.params.reset != "fire_once"]
-    g = nx.DiGraph([(p.source, p.target) for p in network.projections])
-    if not nx.is_directed_acyclic_graph(g):
-        edges = set(nx.find_cycle(g))
-        on_cycle = [p.id for p in network.projections if (p.source, p.target) in edges]
-        problems.append(f"projections {on_cycle} form a cycle through populations "
-                        f"{[u for u, _ in edges]}; the closed form needs an acyclic "
-                        "population graph")
-    return problems
 
 
 def run_closed(

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
+import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import DELIVERY_BUILDERS, Delivery
@@ -20,7 +21,7 @@ from compiler.snn.network import Population, SpikingNetwork
 from compiler.snn.projections import Projection
 from ir.errors import SimulationError
 
-__all__ = ["SimPlan", "build_plan", "ARITHMETICS"]
+__all__ = ["SimPlan", "build_plan", "closed_form_problems", "ARITHMETICS"]
 
 #: The supported arithmetics.
 ARITHMETICS = ("float64", "int64")
@@ -56,6 +57,8 @@ class SimPlan:
     deliveries: Mapping[str, Delivery]
     incoming: Mapping[str, tuple[str, ...]]
     history: Mapping[str, int]
+    #: Why the closed form cannot run the network (:func:`closed_form_problems`; empty: it can).
+    closed_problems: tuple[str, ...] = ()
 
     @property
     def integer(self) -> bool:
@@ -149,7 +152,33 @@ def build_plan(
         deliveries=deliveries,
         incoming={p.id: tuple(q.id for q in network.incoming(p.id)) for p in network.populations},
         history=history,
+        closed_problems=tuple(closed_form_problems(network)),
     )
+
+
+def closed_form_problems(network: SpikingNetwork) -> list[str]:
+    """Why the closed form cannot simulate ``network`` (empty when it can).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from compiler.snn import NeuronParams, Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="n", n_steps=4, populations=[
+    ...     Population(id="a", shape={"i": 1}, params=NeuronParams(reset="subtract"))])
+    >>> closed_form_problems(net)
+    ["population 'a' has reset='subtract'; the closed form needs reset='fire_once'"]
+    """
+    problems = [f"population {p.id!r} has reset={p.params.reset!r}; the closed form needs "
+                "reset='fire_once'"
+                for p in network.populations if not p.source and p.params.reset != "fire_once"]
+    g = nx.DiGraph([(p.source, p.target) for p in network.projections])
+    if not nx.is_directed_acyclic_graph(g):
+        edges = set(nx.find_cycle(g))
+        on_cycle = [p.id for p in network.projections if (p.source, p.target) in edges]
+        problems.append(f"projections {on_cycle} form a cycle through populations "
+                        f"{[u for u, _ in edges]}; the closed form needs an acyclic "
+                        "population graph")
+    return problems
 
 
 #: The stored weights of a projection, by ``kind`` (for the integer check).

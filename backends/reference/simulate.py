@@ -147,19 +147,21 @@ def simulate(
     if not isinstance(inputs, Mapping):
         raise SimulationError(f"network {network.name!r}: inputs must be a mapping of port to "
                               f"array; got {type(inputs).__name__}")
-    network.validate()
-    problems = closed_form_problems(network) if mode != "step" else []
-    check_simulation(network, frames_in(network, inputs),
-                     mode="step" if mode == "step" or problems else "closed",
-                     record_spikes=record_spikes, max_memory_bytes=max_memory_bytes,
-                     max_time_s=max_time_s,
-                     closed_eligible=mode == "step" and not closed_form_problems(network))
     if plan is None:
-        plan = build_plan(network, arithmetic)
+        network.validate()
+        problems = closed_form_problems(network)
     elif plan.network is not network or plan.arithmetic != arithmetic:
         raise SimulationError(f"network {network.name!r}: the plan given was built for network "
                               f"{plan.network.name!r} with arithmetic {plan.arithmetic!r}; build "
                               f"it with build_plan(network, {arithmetic!r})")
+    else:  # validated when the plan was built
+        problems = list(plan.closed_problems)
+    check_simulation(network, frames_in(network, inputs),
+                     mode="step" if mode == "step" or problems else "closed",
+                     record_spikes=record_spikes, max_memory_bytes=max_memory_bytes,
+                     max_time_s=max_time_s, closed_eligible=mode == "step" and not problems)
+    if plan is None:
+        plan = build_plan(network, arithmetic)
     check_decoders(network)
     if mode == "closed" and problems:
         raise SimulationError(f"network {network.name!r} cannot use mode='closed': "
