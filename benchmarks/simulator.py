@@ -260,7 +260,7 @@ def breakdown(net: SpikingNetwork, x: np.ndarray, repeats: int) -> None:
     from backends.reference.decoding import decode_outputs
     from backends.reference.delivery import TrainCurrents
     from backends.reference.encoding import encode_inputs
-    from backends.reference.neuron import LiveNeurons
+    from backends.reference.live_neurons import LiveNeurons
     from backends.reference.step import run_step
 
     plan = build_plan(net)

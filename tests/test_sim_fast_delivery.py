@@ -28,7 +28,7 @@ from backends.reference.delivery import (
     add_current,
     synapses_per_source,
 )
-from backends.reference.matrix import SEQUENTIAL_MAX, grouped_sums
+from backends.reference.row_sums import SEQUENTIAL_MAX, grouped_sums
 from compiler.snn import MatrixProjection, Population, StencilProjection
 
 

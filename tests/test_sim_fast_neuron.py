@@ -15,7 +15,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from backends.reference.neuron import LiveNeurons, NeuronState, StepParams, neuron_step
+from backends.reference.live_neurons import LiveNeurons
+from backends.reference.neuron import NeuronState, StepParams, neuron_step
 from compiler.snn import NeuronParams, Phase
 
 

@@ -28,7 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from backends.reference.matrix import SEQUENTIAL_MAX, MatrixDelivery, run_starts
+from backends.reference.matrix import MatrixDelivery
+from backends.reference.row_sums import SEQUENTIAL_MAX, run_starts
 from backends.reference.stencil import StencilDelivery
 
 __all__ = ["MatrixDelivery", "StencilDelivery", "Delivery", "DELIVERY_BUILDERS",
@@ -156,7 +157,7 @@ class TrainCurrents:
     not depend on the weights — runs of equal rows, their heads, the tails level by
     level, per block — is indexed once, for all blocks together; a block then costs
     two gathers and a few slice additions, with the arithmetic of
-    :func:`~backends.reference.matrix.grouped_sums` (``np.add.reduceat``'s), so every
+    :func:`~backends.reference.row_sums.grouped_sums` (``np.add.reduceat``'s), so every
     row's current is bit for bit the one a delivery of step ``a`` alone gives
     (the delivery's rows are independent, :data:`TRAIN_CURRENTS`).
 

@@ -11,14 +11,8 @@ an event-driven product that reads only the weight rows of spiking inputs.
 ``W`` is stored once per delay class (a dense projection without delays keeps
 its own array), never tiled over repetitions; repetition axes are matched by name.
 
-Arithmetic of the gathering path (the one both engines share for unweighted
-events): the events of one batch row, in the order given, contribute their
-weight rows ``w_1, …, w_m`` and the row's current is exactly what
-``np.add.reduceat`` gives for that run of rows, ``w_1 + ((w_2 + w_3) + … + w_m)``
-for ``m ≤ 8`` (numpy sums the tail of a reduction from its first element, in
-order, below 8 addends) and ``np.add.reduceat`` itself for longer runs.
-:func:`grouped_sums` evaluates it level by level (all rows' ``k``-th events at
-once) instead of one tiny reduction per row and column.
+The gathering path's arithmetic (shared by both engines for unweighted events) is
+:mod:`backends.reference.row_sums`'s.
 :meth:`MatrixDelivery.add_to` adds the current into a flat state array touching
 only the rows hit.
 """
@@ -31,6 +25,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
+from backends.reference.row_sums import grouped_sums, n_runs, run_starts
 from backends.reference.signed_factor import SignedFactor, distinct_up_to_sign, signed_factor
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
@@ -327,7 +322,7 @@ class MatrixDelivery:
             values = None if values is None else values[order]
         data = None if values is None else values.astype(dtype)
         blas = data is not None or self.blas_events
-        if blas and events.size * _DENSE_EVENTS_PER_ROW >= self.n_in * _n_runs(rows):
+        if blas and events.size * _DENSE_EVENTS_PER_ROW >= self.n_in * n_runs(rows):
             # dense: a one-hot block and one BLAS product.  Only for the closed form's
             # weighted features, or networks the closed form cannot run: otherwise the
             # step engine and the closed form's driven path both gather, adding every
@@ -378,11 +373,6 @@ class MatrixDelivery:
         return self.source_synapses[k]
 
 
-#: Runs of more addends than this are summed by ``np.add.reduceat`` itself (numpy's pairwise
-#: summation is sequential only below 8 tail addends).
-SEQUENTIAL_MAX = 8
-
-
 def _target_index(
     block_shape: tuple[int, ...], to_target: tuple[int, ...], n_out: int
 ) -> np.ndarray | None:
@@ -396,113 +386,3 @@ def _target_index(
     index = np.empty(size, np.int64)
     index[block_of_target] = np.arange(size)
     return index.reshape(-1, n_out)
-
-
-def run_starts(rows: np.ndarray) -> np.ndarray:
-    """Positions where a run of equal values in ``rows`` (sorted) begins.
-
-    Examples
-    --------
-    >>> run_starts(np.array([2, 2, 5, 7, 7, 7])).tolist()
-    [0, 2, 3]
-    """
-    new = np.empty(rows.size, bool)
-    new[:1] = True
-    np.not_equal(rows[1:], rows[:-1], out=new[1:])
-    return new.nonzero()[0]
-
-
-def _n_runs(rows: np.ndarray) -> int:
-    """Number of runs of equal values in ``rows`` (sorted)."""
-    return int(np.count_nonzero(rows[1:] != rows[:-1])) + 1 if rows.size else 0
-
-
-def grouped_sums(
-    table: np.ndarray, index: np.ndarray, rows: np.ndarray, scale: np.ndarray | None = None,
-    workspace: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    r"""Sum the table rows ``table[index[i]]`` (times ``scale[i]``) over each run of equal ``rows``.
-
-    Bit for bit what ``np.add.reduceat(table[index] * scale[:, None], run starts,
-    axis=0)`` returns, without its per-run, per-column inner loops: a run of
-    ``m ≤ 8`` addends ``w_1 … w_m`` is ``w_1 + (((w_2 + w_3) + w_4) + …)``
-    (numpy's reduction starts from the first element and adds the tail in order
-    below 8 tail addends); longer runs go through ``np.add.reduceat``.  The run
-    heads ``w_1`` are gathered in run order; the tails are summed level by level
-    (the ``j``-th addend of every run at once, runs ordered by decreasing length
-    so that each level is one contiguous slice) and added to their heads.
-
-    Parameters
-    ----------
-    table : ndarray
-        ``(n_table, n_out)`` rows to gather (float64 or int64).
-    index : ndarray of int
-        Table row per addend.
-    rows : ndarray of int
-        Output row per addend, sorted ascending (equal values form a run).
-    scale : ndarray, optional
-        Factor per addend (of the table's dtype).
-    workspace : ndarray, optional
-        A ``(≥ rows.size, n_out)`` array of the table's dtype to gather into
-        (reused across calls: fresh large arrays cost page faults); ``sums`` is
-        then a view of it.
-
-    Returns
-    -------
-    hit : ndarray
-        The distinct ``rows``, ascending.
-    sums : ndarray
-        ``(hit.size, n_out)`` sums.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = np.array([[1.0, 2.0], [10.0, 20.0], [100.0, 200.0]])
-    >>> hit, sums = grouped_sums(t, np.array([0, 1, 2, 2]), np.array([3, 5, 5, 5]))
-    >>> hit.tolist(), sums.tolist()
-    ([3, 5], [[1.0, 2.0], [210.0, 420.0]])
-    >>> r = np.random.default_rng(0).standard_normal((12, 3))
-    >>> rows = np.repeat([0, 1, 2], [1, 5, 6])
-    >>> bool(np.all(grouped_sums(r, np.arange(12), rows)[1]
-    ...             == np.add.reduceat(r, [0, 1, 6], axis=0)))
-    True
-    """
-    def gather(at: np.ndarray, offset: int = 0) -> np.ndarray:
-        """``table[index[at]] * scale[at]``, into the workspace from ``offset`` if given."""
-        got = np.take(table, index[at], axis=0,
-                      out=None if workspace is None else workspace[offset:offset + at.size])
-        if scale is not None:
-            np.multiply(got, scale[at][:, None], out=got)
-        return got
-
-    starts = run_starts(rows) if rows.size else rows
-    sums = gather(starts)  # the run heads
-    if starts.size == rows.size:  # one addend per run
-        return rows, sums
-    counts = np.empty_like(starts)
-    counts[:-1] = starts[1:] - starts[:-1]
-    counts[-1] = rows.size - starts[-1]
-    multi = (counts > 1).nonzero()[0]
-    order = np.argsort(-counts[multi], kind="stable")  # longest runs first
-    owner = multi[order]  # the run (index into sums) of each tail
-    length, first = counts[owner], starts[owner]
-    depth = min(int(length[0]), SEQUENTIAL_MAX)
-    level = np.arange(1, depth)
-    # n_at[j - 1]: runs with more than j addends; tail addends taken level by level
-    n_at = np.count_nonzero(length[None, :] > level[:, None], axis=1)
-    tails = gather((first[:, None] + level).T[level[:, None] < length[None, :]], starts.size)
-    ends = np.cumsum(n_at)
-    tail = tails[:n_at[0]]
-    for j in range(1, depth - 1):
-        tail[:n_at[j]] += tails[ends[j - 1]:ends[j]]
-    sums[owner] += tail
-    deep = int(np.count_nonzero(length > SEQUENTIAL_MAX))
-    if deep:  # long runs: numpy's own pairwise reduction
-        lengths = length[:deep]
-        begin = np.cumsum(lengths) - lengths  # where each long run starts in `run`
-        run = np.repeat(first[:deep] - begin, lengths) + np.arange(int(lengths.sum()))
-        long = table[index[run]]
-        if scale is not None:
-            long = long * scale[run][:, None]
-        sums[owner[:deep]] = np.add.reduceat(long, begin, axis=0)
-    return rows[starts], sums

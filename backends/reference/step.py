@@ -7,7 +7,7 @@ source before target):
 2. a neuron population gathers its contributions — for each incoming projection
    and delay class ``d``, the source's spikes of step ``t - d`` read from a ring
    buffer of the last ``history`` steps (event lists, not rasters) — and takes
-   one in-place step (:class:`~backends.reference.neuron.LiveNeurons`, the
+   one in-place step (:class:`~backends.reference.live_neurons.LiveNeurons`, the
    arithmetic of :func:`~backends.reference.neuron.neuron_step`), the currents
    added into its state by :func:`~backends.reference.delivery.add_current`.
    Projections fed by an encoder's latency train (known before the loop) take
@@ -30,7 +30,7 @@ Every step performs, element by element, the floating-point operations of
 :func:`~backends.reference.neuron.neuron_step` and of the deliveries' ``current``
 (``tests/test_sim_fast_engine.py`` checks every bit, signed zeros included,
 against the plain per-step evaluation); only operations that cannot change a bit
-are left out (:class:`~backends.reference.neuron.LiveNeurons`).
+are left out (:class:`~backends.reference.live_neurons.LiveNeurons`).
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ from backends.reference.delivery import (
     synapses_per_source,
 )
 from backends.reference.encoding import Train
-from backends.reference.neuron import LiveNeurons
+from backends.reference.live_neurons import LiveNeurons
 from backends.reference.plan import SimPlan
 from backends.reference.result import Activity
 
