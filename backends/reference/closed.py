@@ -104,12 +104,15 @@ def run_closed(
     for pid, pop in plan.populations.items():
         flat, step = spikes[pid]
         n = n_frames * pop.size
-        if pid in first:  # fire-once neurons: at most one spike each
+        if pid not in first and getattr(trains[pid], "at_most_once", False):
+            first[pid] = np.full(n, -1, np.int64)  # a latency train: one spike at most
+            first[pid][flat] = step
+        if pid in first:  # fire-once neurons and latency trains: at most one spike each
             counts[pid] = (first[pid] >= 0).astype(np.int64).reshape(n_frames, -1)
         else:
             counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
-        first[pid] = (first[pid] if pid in first else first_spike_steps(flat, step, n)
-                      ).reshape(n_frames, -1)
+            first[pid] = first_spike_steps(flat, step, n)
+        first[pid] = first[pid].reshape(n_frames, -1)
         if rasters is not None:
             rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
             f, i = np.divmod(flat, pop.size)
@@ -125,7 +128,10 @@ def _arriving(step: np.ndarray, delay: int, n_steps: int) -> int:
 def _solve(
     plan: SimPlan, pid: str, spikes: dict, n_frames: int, block_bytes: int
 ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray, np.ndarray]:
-    """Spike events ``(flat, step)`` by step, end membranes and first spike steps of ``pid``."""
+    """Spike events ``(flat, step)``, end membranes and first spike steps of ``pid``.
+
+    The events are ordered by step (ties by neuron) when a projection reads them.
+    """
     params = plan.neurons[pid]
     n_steps = plan.network.n_steps
     arrivals = []
@@ -158,6 +164,8 @@ def _solve(
                 part = seg._replace(start=s0, stop=min(s0 + block, seg.stop))
                 u, v = driven(u, v, first, part, params, arrivals, n_frames, pop.dims)
     flat = np.flatnonzero(first >= 0)
+    if not any(q.source == pid for q in plan.network.projections):
+        return (flat, first[flat]), v.reshape(n_frames, -1), first  # nobody reads them by step
     order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
     return (flat[order], first[flat][order]), v.reshape(n_frames, -1), first
 

@@ -366,7 +366,8 @@ class MatrixDelivery:
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
-        return int(self.source_synapses[k][events % self.col_of.size].sum())
+        # mode="wrap" reduces flat batch indices to neurons without a division pass
+        return int(np.take(self.source_synapses[k], events, mode="wrap").sum())
 
     def synapses_per_source(self, k: int) -> np.ndarray:
         """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""

@@ -319,4 +319,4 @@ class StencilDelivery:
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (taps landing inside the map)."""
-        return int(self.synapses[k][events % self.src_size].sum())
+        return int(np.take(self.synapses[k], events, mode="wrap").sum())
