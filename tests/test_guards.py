@@ -38,9 +38,11 @@ def test_simulation_estimate_by_hand():
     e = estimate_simulation(_net(), n_frames=3, mode="step")
     # plan: 20 B x 8 synapses + 32 B x 10 steps x 1 neuron population; per frame: state
     # 16 x 30 + neurons 24 x 10 + trains 16 x 20 + one delivery 16 x 5 reps x (4 + 2)
+    # + the train's currents read ahead (step mode) 48 x 20 input spikes
     assert e.fixed_bytes == 160 + 320
-    assert e.per_frame_bytes == 480 + 240 + 320 + 480
-    assert e.memory_bytes == 480 + 3 * 1520
+    assert e.per_frame_bytes == 480 + 240 + 320 + 480 + 960
+    assert e.memory_bytes == 480 + 3 * 2480
+    assert estimate_simulation(_net(), n_frames=3, mode="closed").per_frame_bytes == 1520
     # step: 3 frames x (10 steps x 10 neurons / 2e8 + 40 synapse instances x 1 spike / 1e9)
     #       + 10 steps x 2 populations x 2e-5 s
     assert e.time_s == pytest.approx(3 * (100 / 2e8 + 40 / 1e9) + 20 * 2e-5)
@@ -58,11 +60,11 @@ def test_frames_are_read_from_shapes_only():
 def test_simulate_refuses_over_the_memory_limit_before_running():
     net = _net()
     x = np.zeros((100, 5, 4))
-    need = 480 + 100 * 1520
+    need = 480 + 100 * 2480  # the step engine (the network cannot run in closed form)
     with pytest.raises(SimulationError) as info:
         simulate(net, {"x": x}, max_memory_bytes=need - 1)
     message = str(info.value)
-    assert "100 frames" in message and "152 kB" in message and "99 frames per call" in message
+    assert "100 frames" in message and "248 kB" in message and "99 frames per call" in message
     assert simulate(net, {"x": x}, max_memory_bytes=need, out_of_range="clip").n_frames == 100
     assert simulate(net, {"x": x}, max_memory_bytes=None).n_frames == 100
 

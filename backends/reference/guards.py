@@ -18,6 +18,8 @@ Memory model (bytes; ``F`` frames, ``S`` sizes of the populations, ``T`` steps,
       + F\Big(\underbrace{\textstyle 16\sum_p S_p + 24\sum_{p \notin s} S_p}_{\text{state}}
       + \underbrace{\textstyle 16\sum_{p \in s} S_p}_{\text{trains}}
       + \underbrace{\textstyle \max_q 16\,R_q\,(n_{in} + n_{out})}_{\text{one delivery}}
+      + \underbrace{\textstyle 48\sum_{q:\,\mathrm{src}_q \in s} S_{\mathrm{src}_q}}_{\text{step
+        mode: trains read ahead}}
       + \underbrace{T\textstyle\sum_p S_p}_{\text{rasters, if recorded}}\Big)
 
 Time model (seconds): neuron updates at :data:`NEURON_UPDATES_PER_S`
@@ -41,12 +43,12 @@ Examples
 ...     encoders=[Encoder(port="x", population="a",
 ...                       code=LatencyCode(t_max=10, x_min=0.0, x_max=1.0))])
 >>> e = estimate_simulation(net, n_frames=1, mode="step")
->>> e.fixed_bytes, e.per_frame_bytes   # 20·8 + 32·10·1 ; 16·6 + 24·2 + 16·4 + 16·1·(4+2)
-(480, 304)
+>>> e.fixed_bytes, e.per_frame_bytes   # 20·8 + 32·10·1 ; 16·6 + 24·2 + 16·4 + 16·1·(4+2) + 48·4
+(480, 496)
 >>> check_simulation(net, n_frames=10**9, mode="step")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-ir.errors.SimulationError: network 'n': simulating 1000000000 frames would take about 304 GB ...
+ir.errors.SimulationError: network 'n': simulating 1000000000 frames would take about 496 GB ...
 """
 
 from __future__ import annotations
@@ -83,6 +85,8 @@ _STATE_BYTES = 16      # first spike + spike count, every population
 _NEURON_BYTES = 24     # u, v and the current of a neuron population
 _TRAIN_BYTES = 16      # a latency train: flat index + step per source value
 _SCHEDULE_BYTES = 32   # per step of a neuron population: phase index, bias, input/spike flags
+_AHEAD_BYTES = 48      # step mode, per input spike of a train read ahead: ~6 int64 indices
+#                        (plus a workspace of at most 1 MiB per projection, not counted)
 
 
 @dataclass(frozen=True)
@@ -184,6 +188,8 @@ def estimate_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "
             delivery = max(delivery, 16 * (src.size + tgt.size))
             instances = tgt.size * q.n_taps
         synapse_ops += instances * _spikes_per_neuron(network, q.source)
+        if mode == "step" and src.source:  # the train's currents computed ahead in blocks
+            per_frame += _AHEAD_BYTES * src.size
     per_frame += delivery
     if record_spikes:
         per_frame += network.n_steps * sizes
