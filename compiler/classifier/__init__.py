@@ -5,7 +5,9 @@
 * :mod:`compiler.classifier.forward` — the numpy forward pass (:func:`run_plan`,
   :func:`classify`), the reference semantics of the op;
 * :mod:`compiler.classifier.weights` — loading and saving the ``.npz`` weights;
-* :mod:`compiler.classifier.train` — PyTorch training (optional extra ``train``).
+* :mod:`compiler.classifier.default` — the shipped stack, dataset and training settings;
+* :mod:`compiler.classifier.train` — the PyTorch models (optional extra ``train``);
+* :mod:`compiler.classifier.fit` — their training loop with the activity regulariser.
 """
 
 from compiler.classifier.forward import ForwardResult, classify, run_plan

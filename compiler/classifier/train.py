@@ -12,26 +12,26 @@ Models (``(n, T, H, W)`` ROI sequences in, class scores out):
 * :func:`ann_model` — the same convolutions on every frame, an LSTM over the frames,
   and a dense readout of the last hidden state (real or binary ``[x > level]`` input).
 
-:func:`fit` trains any of them with Adam and cross-entropy, keeping the weights of the
-best validation epoch. :func:`mac_counts` gives the baselines' multiply-accumulates.
-Everything is seeded (``torch.manual_seed``) and runs on the CPU.
+:func:`compiler.classifier.fit.fit` trains any of them. :func:`fan_out` gives the synapses a
+spike drives (the SNN's differentiable event count uses it), :func:`mac_counts` the
+baselines' multiply-accumulates. Everything is seeded (``torch.manual_seed``) and runs on
+the CPU.
 """
 
 from __future__ import annotations
 
-import copy
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ir.ops.classify import Classifier, Conv2d, Integrator, Pool, Recurrent
 
-__all__ = ["FitResult", "ann_model", "cnn_model", "fit", "mac_counts", "snn_model",
-           "snn_weights"]
+__all__ = ["ann_model", "cnn_model", "fan_out", "mac_counts", "snn_model", "snn_weights",
+           "torch_module"]
 
 
-def _torch() -> Any:
+def torch_module() -> Any:
+    """``torch``, imported on first use (the optional extra ``train``)."""
     try:
         import torch
     except ImportError as err:  # pragma: no cover - depends on the environment
@@ -41,8 +41,8 @@ def _torch() -> Any:
 
 
 def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: float = 5.0,
-              seed: int = 0) -> Any:
-    """A ``torch.nn.Module`` of the op's layer stack; ``state_dict`` keys = the npz keys.
+              weight_bits: int | None = None, seed: int = 0) -> Any:
+    r"""A ``torch.nn.Module`` of the op's layer stack; ``state_dict`` keys = the npz keys.
 
     Parameters
     ----------
@@ -52,6 +52,13 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
         ROI size along ``op.map_axes``.
     surrogate_beta : float
         Steepness of the fast-sigmoid surrogate gradient.
+    weight_bits : int, optional
+        Quantization-aware training for a target of this many weight bits: the forward pass
+        uses every population's weights rounded to the grid of the compiler's quantize pass,
+        :math:`w' = s\,\mathrm{round}(w/s)` with one scale :math:`s = \max|w| / (2^{b-1}-1)`
+        per population (a recurrent layer's input and recurrent weights share it), and the
+        gradient passes straight through the rounding. :func:`snn_weights` then returns the
+        rounded weights, which the quantize pass maps onto integers without further error.
     seed : int
         Seed of the weight initialisation.
 
@@ -59,13 +66,16 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
     -------
     torch.nn.Module
         ``forward(x)`` maps ``(n, T, H, W)`` to ``(n, classes)`` scores; after a call,
-        ``.last_spikes`` holds the mean spikes per sample.
+        ``.last_spikes`` holds the mean spikes per sample and ``.last_events`` the mean
+        synaptic events per sample (a differentiable tensor): every input or layer spike
+        times its :func:`fan_out`, plus a recurrent layer's spikes times its ``units`` at
+        the next step — the count of :func:`compiler.classifier.forward.run_plan`.
     """
-    torch = _torch()
+    torch = torch_module()
     nn, fnn = torch.nn, torch.nn.functional
     torch.manual_seed(seed)
     shapes = op.feature_shapes("classifier", tuple(map_shape))
-    fan_out = _fan_out(op, tuple(map_shape))
+    fans = [torch.as_tensor(f, dtype=torch.float32) for f in fan_out(op, tuple(map_shape))]
 
     class Spike(torch.autograd.Function):
         @staticmethod
@@ -94,16 +104,28 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
                 self.recurrent = nn.Parameter(torch.empty(layer.units, layer.units))
                 nn.init.orthogonal_(self.recurrent, gain=0.5)
 
-        def current(self, x, s_prev):
+        def grid(self) -> dict:
+            """The weights the forward pass uses (on the quantization grid if requested)."""
+            ws = dict(self.named_parameters())
+            if weight_bits is None or not ws:
+                return ws
+            peak = max(w.detach().abs().max() for w in ws.values())
+            if peak == 0:
+                return ws
+            step = peak / (2 ** (weight_bits - 1) - 1)
+            return {k: w + (torch.round(w.detach() / step) * step - w).detach()
+                    for k, w in ws.items()}
+
+        def current(self, x, s_prev, ws):
             lay = self.layer
             if isinstance(lay, Conv2d):
-                return fnn.conv2d(x, self.weight, stride=lay.stride, padding=lay.padding)
+                return fnn.conv2d(x, ws["weight"], stride=lay.stride, padding=lay.padding)
             if isinstance(lay, Pool):
                 pool = fnn.max_pool2d if lay.mode == "max" else fnn.avg_pool2d
                 return pool(x, lay.size)
-            out = x.flatten(1) @ self.weight.T
+            out = x.flatten(1) @ ws["weight"].T
             if isinstance(lay, Recurrent):
-                out = out + s_prev @ self.recurrent.T
+                out = out + s_prev @ ws["recurrent"].T
             return out
 
     class SNN(nn.Module):
@@ -112,26 +134,35 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
             self.layers = nn.ModuleList(
                 [Layer(shapes[i], shapes[i + 1], layer) for i, layer in enumerate(op.layers)])
             self.last_spikes = 0.0
+            self.weight_bits = weight_bits
+
+        def grid_weights(self) -> dict:
+            """``layers.<i>.<name>`` -> the weight tensors the forward pass uses."""
+            return {f"layers.{i}.{k}": w for i, mod in enumerate(self.layers)
+                    for k, w in mod.grid().items()}
 
         def forward(self, x):
             n, steps = x.shape[:2]
             x = encode(x)
+            ws = [mod.grid() for mod in self.layers]
             state = [None] * len(self.layers)
             spikes = torch.zeros((), dtype=x.dtype)
-            events = fan_out[-1] * x.sum() if op.encoding.kind == "levels" else 0.0
+            events = (x * fans[-1]).sum() if op.encoding.kind == "levels" else 0.0
             for t in range(steps):
                 h = x[:, t]
                 for k, mod in enumerate(self.layers):
                     lay = mod.layer
                     if isinstance(lay, Pool):
-                        h = mod.current(h, None)
+                        h = mod.current(h, None, ws[k])
                         if lay.mode == "max":
-                            events = events + fan_out[k] * h.sum()
+                            events = events + (h * fans[k]).sum()
                         continue
                     u, v, s = state[k] if state[k] is not None else (0.0, 0.0, torch.zeros(
                         n, lay.units, dtype=x.dtype) if isinstance(lay, Recurrent) else None)
                     par = lay if isinstance(lay, Integrator) else lay.neuron
-                    u = (1.0 - par.du) * u + mod.current(h, s)
+                    if isinstance(lay, Recurrent):  # last step's spikes arrive (all-to-all)
+                        events = events + lay.units * s.sum()
+                    u = (1.0 - par.du) * u + mod.current(h, s, ws[k])
                     v = (1.0 - par.dv) * v + u
                     if isinstance(lay, Integrator):
                         state[k] = (u, v, None)
@@ -143,7 +174,7 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
                     else:
                         v = v * (1.0 - s.detach()) + par.v_reset * s.detach()
                     spikes = spikes + s.sum().detach()
-                    events = events + fan_out[k] * s.sum()
+                    events = events + (s * fans[k]).sum()
                     state[k] = (u, v, s)
                     h = s
             self.last_spikes = float(spikes) / n
@@ -159,26 +190,40 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
     return SNN()
 
 
-def _fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[float]:
-    """Mean synapses driven by one spike of each layer's output (last entry: of an input)."""
+def fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[np.ndarray]:
+    """Synapses driven by one spike of each neuron: per layer output, last entry the input.
+
+    Entry ``k`` has the shape of layer ``k``'s output features (zeros for layers whose
+    output is not a population: an ``avg`` pool, the integrator) and counts the wired
+    synapses of the next population in :func:`compiler.classifier.plan.build_plan`
+    (all-ones weights) that a spike of that neuron drives. A recurrent layer's spikes also
+    reach its own ``units`` neurons one step later (not included here).
+
+    Examples
+    --------
+    >>> from ir.ops.classify import Conv2d, Integrator, LevelsEncoding
+    >>> op = Classifier(num_classes=2, weights="w", encoding=LevelsEncoding(levels=(0.0,)),
+    ...                 layers=(Conv2d(channels=3, kernel=(2, 1)), Integrator(units=2)))
+    >>> [f.tolist() for f in fan_out(op, (3, 1))]
+    [[[[2.0], [2.0]], [[2.0], [2.0]], [[2.0], [2.0]]], [0.0, 0.0], [[[3.0], [6.0], [3.0]]]]
+    """
     from compiler.classifier.plan import build_plan
 
+    shapes = op.feature_shapes("classifier", map_shape)
     ones = {k: np.ones(v) for k, v in op.weight_shapes("classifier", map_shape).items()}
     plans = build_plan(op, ones, map_shape)
-    out = [0.0] * (len(op.layers) + 1)
+    out = [np.zeros(shape) for shape in shapes[1:]] + [np.zeros(shapes[0])]
     for p in plans:
-        mean = p.matrix.nnz / p.matrix.shape[0]
         prev = max((q.index for q in plans if q.index < p.index), default=-1)
-        out[prev] += mean
-        if p.recurrent is not None:
-            out[p.index] += p.recurrent.nnz / p.recurrent.shape[0]
+        out[prev] = out[prev] + np.diff(p.matrix.indptr).reshape(shapes[prev + 1])
     return out
 
 
 def snn_weights(model: Any) -> dict[str, np.ndarray]:
-    """The model's weights as the npz mapping (``layers.<i>.weight`` / ``.recurrent``)."""
+    """The weights the model computes with, as the npz mapping (``layers.<i>.weight`` /
+    ``.recurrent``): on the quantization grid for a ``weight_bits`` model."""
     return {k: v.detach().cpu().numpy().astype(np.float64)
-            for k, v in model.state_dict().items()}
+            for k, v in model.grid_weights().items()}
 
 
 def _conv_stack(torch: Any, in_channels: int, map_shape: tuple[int, int]) -> tuple[Any, int]:
@@ -193,7 +238,7 @@ def _conv_stack(torch: Any, in_channels: int, map_shape: tuple[int, int]) -> tup
 
 def cnn_model(map_shape: tuple[int, int], *, scale: float = 0.05, seed: int = 0) -> Any:
     """The single-frame CNN baseline; ``forward((n, T, H, W))`` averages the frames' logits."""
-    torch = _torch()
+    torch = torch_module()
     nn = torch.nn
     torch.manual_seed(seed)
 
@@ -217,7 +262,7 @@ def cnn_model(map_shape: tuple[int, int], *, scale: float = 0.05, seed: int = 0)
 def ann_model(map_shape: tuple[int, int], *, level: float | None = None, scale: float = 0.05,
               hidden: int = 64, seed: int = 0) -> Any:
     """Conv + LSTM baseline: real input ``scale · x`` or, with ``level``, binary ``[x > level]``."""
-    torch = _torch()
+    torch = torch_module()
     nn = torch.nn
     torch.manual_seed(seed)
 
@@ -253,94 +298,3 @@ def mac_counts(map_shape: tuple[int, int], n_frames: int, hidden: int = 64) -> d
     cnn = conv + width * 32 + 32 * 3
     lstm = 4 * hidden * (width + hidden)
     return {"cnn_per_frame": cnn, "ann": n_frames * (conv + lstm) + hidden * 3}
-
-
-@dataclass
-class FitResult:
-    """The trained model, its best validation accuracy and the epoch it came from."""
-
-    model: Any
-    val_accuracy: float
-    best_epoch: int
-    history: list[tuple[float, float]]
-
-
-def fit(model: Any, train: tuple[np.ndarray, np.ndarray], val: tuple[np.ndarray, np.ndarray],
-        *, epochs: int = 20, batch_size: int = 64, lr: float = 3e-3, seed: int = 0,
-        frames_loss: bool = False, events_weight: float = 0.0, log: Any = None) -> FitResult:
-    """Adam + cross-entropy over shuffled mini-batches; keep the best validation epoch.
-
-    Parameters
-    ----------
-    model : torch.nn.Module
-        Maps ``(n, T, H, W)`` float32 to logits.
-    train, val : (x, y)
-        ROI sequences and labels.
-    epochs, batch_size, lr, seed : training settings.
-    frames_loss : bool
-        Train a frame model (``model.frames``) on every frame's label (the CNN).
-    events_weight : float
-        Weight of the SNN's mean synaptic events per sample (``model.last_events``, through
-        the surrogate gradient) added to the loss, ramped linearly from 0 at the first epoch
-        to the full weight at the last: an activity regulariser that does not silence the
-        network before it has learnt.
-    log : callable, optional
-        Called with one line per epoch.
-
-    Returns
-    -------
-    FitResult
-    """
-    torch = _torch()
-    torch.manual_seed(seed)
-    gen = np.random.default_rng(seed)
-    x_tr, y_tr = torch.as_tensor(train[0], dtype=torch.float32), torch.as_tensor(train[1])
-    opt = torch.optim.Adam(model.parameters(), lr=lr)
-    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(1, epochs))
-    best, best_state, best_epoch, history = -1.0, None, -1, []
-    for epoch in range(epochs):
-        model.train()
-        ramp = epoch / max(1, epochs - 1)  # the activity penalty grows from 0 to its weight
-        order = gen.permutation(len(y_tr))
-        total = 0.0
-        for start in range(0, len(order), batch_size):
-            idx = torch.as_tensor(order[start:start + batch_size])
-            xb, yb = x_tr[idx], y_tr[idx]
-            if frames_loss:
-                logits = model.frames(xb)
-                loss = torch.nn.functional.cross_entropy(
-                    logits.reshape(-1, logits.shape[-1]), yb.repeat_interleave(xb.shape[1]))
-            else:
-                loss = torch.nn.functional.cross_entropy(model(xb), yb)
-            if events_weight:
-                loss = loss + events_weight * ramp * model.last_events
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            total += float(loss.detach()) * len(idx)
-        sched.step()
-        acc = accuracy(model, *val)
-        history.append((total / len(order), acc))
-        if log is not None:
-            log(f"epoch {epoch:3d} loss {total / len(order):.4f} val {acc:.4f}")
-        if acc > best:
-            best, best_epoch, best_state = acc, epoch, copy.deepcopy(model.state_dict())
-    model.load_state_dict(best_state)
-    return FitResult(model=model, val_accuracy=best, best_epoch=best_epoch, history=history)
-
-
-def predict(model: Any, x: np.ndarray, batch_size: int = 256) -> np.ndarray:
-    """Class predictions of a model (eval mode, no gradients)."""
-    torch = _torch()
-    model.eval()
-    out = []
-    with torch.no_grad():
-        for start in range(0, len(x), batch_size):
-            xb = torch.as_tensor(x[start:start + batch_size], dtype=torch.float32)
-            out.append(model(xb).argmax(dim=1).numpy())
-    return np.concatenate(out) if out else np.zeros(0, dtype=np.int64)
-
-
-def accuracy(model: Any, x: np.ndarray, y: np.ndarray) -> float:
-    """Fraction of correct predictions."""
-    return float(np.mean(predict(model, x) == np.asarray(y))) if len(y) else 0.0
