@@ -153,7 +153,7 @@ def solve_gated(
     when = when.reshape(shape)
     v_at = v + w_gate
     total = v + w_gate
-    u_end = np.zeros_like(v)
+    u_end = np.zeros(v.shape, v.dtype)
     if need_u:
         last = arrive == s1 - 1
         u_end += dl.current(0, flat[last], n_frames).reshape(-1)

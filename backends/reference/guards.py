@@ -57,8 +57,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from math import prod
 
-import numpy as np
-
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
 
@@ -134,8 +132,6 @@ def human_bytes(n: float) -> str:
 
 
 def _nnz(proj) -> int:
-    if getattr(proj, "weights", None) is not None:
-        return int(np.count_nonzero(proj.weights))
     return int(proj.n_synapses)
 
 
@@ -271,6 +267,7 @@ def frames_in(network: SpikingNetwork, inputs: Mapping[str, object]) -> int:
 
     Examples
     --------
+    >>> import numpy as np
     >>> from compiler.snn import Encoder, LatencyCode, Population, SpikingNetwork
     >>> net = SpikingNetwork(name="n", n_steps=4,
     ...     populations=[Population(id="a", shape={"i": 2}, source=True)],

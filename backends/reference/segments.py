@@ -67,7 +67,7 @@ def charge(
     """
     n, b = seg.stop - seg.start, seg.bias
     if b == 0 and not seg.spiking_on:
-        return np.zeros_like(v), v
+        return np.zeros(v.shape, v.dtype), v
     end = v + n * b
     if seg.spiking_on:
         top = end if b > 0 else np.maximum(v + b, end)
@@ -95,7 +95,7 @@ def charge(
             k = np.where(w + b >= params.v_th, 1, n + 1)
         hit = k <= n
         first[idle[hit]] = seg.start + k[hit].astype(np.int64) - 1
-    return np.zeros_like(v), end
+    return np.zeros(v.shape, v.dtype), end
 
 
 def silent(
@@ -109,7 +109,7 @@ def silent(
     """
     s0, s1, b = seg.start, seg.stop, seg.bias
     total = np.zeros((n_frames, *dims), u.dtype)
-    second = np.zeros_like(total)
+    second = np.zeros(total.shape, total.dtype)
     for arr in arrivals:
         flat, arrive = arr.within(s0, s1)
         if not flat.size:

@@ -40,6 +40,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -180,9 +181,9 @@ class MatrixProjection:
         """Number of matrix columns (flattened ``produce`` axes)."""
         return self.n_in_out[1]
 
-    @property
+    @cached_property
     def n_synapses(self) -> int:
-        """Stored synapses of one instance: the non-zero weights (dense or sparse)."""
+        """Stored synapses of one instance: the non-zero weights (dense or sparse; counted once)."""
         return int(np.count_nonzero(self.weights if self.weights is not None else self.values))
 
     @property
