@@ -355,7 +355,12 @@ class Decoder(_Frozen):
         value = ext[index]
         if np.isscalar(gains) and gains == 1.0:
             return value
-        return np.where((index > 0) & (index <= n), value / gains, value)
+        if np.broadcast_shapes(value.shape, np.shape(gains)) != value.shape:
+            value = np.broadcast_to(value, np.broadcast_shapes(value.shape,
+                                                               np.shape(gains))).copy()
+            index = np.broadcast_to(index, value.shape)
+        np.divide(value, gains, out=value, where=(index > 0) & (index <= n))
+        return value
 
 
 def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
