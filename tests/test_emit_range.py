@@ -14,18 +14,14 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from test_out_of_range import one_layer_net
 
 from backends.emit import emit_numpy
 from backends.emit.run_package import run_package
 from backends.reference import run_program, simulate
 from compiler.compile import compile_graph
 from compiler.snn import (
-    Decoder,
-    Encoder,
     LatencyCode,
-    MatrixProjection,
-    NeuronParams,
-    Population,
     RateCode,
     SpikingNetwork,
 )
@@ -45,17 +41,7 @@ CODES = {
 
 
 def _net(code, split: str = "none") -> SpikingNetwork:
-    parts = {"part": 2} if split != "none" else {}
-    return SpikingNetwork(
-        name="n", n_steps=10,
-        populations=[Population(id="a", shape={"i": 3, **parts}, source=True),
-                     Population(id="b", shape={"o": 1},
-                                params=NeuronParams(du=0.0, v_th=1.0, reset="fire_once"))],
-        projections=[MatrixProjection(id="w", source="a", target="b",
-                                      contract=("i", *parts), produce=("o",),
-                                      weights=np.ones((3 * (2 if parts else 1), 1)))],
-        encoders=[Encoder(port="x", population="a", code=code, split=split)],
-        decoders=[Decoder(port="y", population="b", kind="count")])
+    return one_layer_net(code, split, decoder="count")
 
 
 @pytest.fixture(scope="module")

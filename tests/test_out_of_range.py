@@ -31,7 +31,8 @@ from ir import Graph
 from ir.errors import IRError, SimulationError
 
 
-def _net(code, split: str = "none") -> SpikingNetwork:
+def one_layer_net(code, split: str = "none", decoder: str = "spike_time") -> SpikingNetwork:
+    """Three inputs (split per ``split``) into one fire-once neuron read by ``decoder``."""
     parts = {"part": 2} if split != "none" else {}
     return SpikingNetwork(
         name="n", n_steps=10,
@@ -42,7 +43,8 @@ def _net(code, split: str = "none") -> SpikingNetwork:
                                       contract=("i", *parts), produce=("o",),
                                       weights=np.ones((3 * (2 if parts else 1), 1)))],
         encoders=[Encoder(port="x", population="a", code=code, split=split)],
-        decoders=[Decoder(port="y", population="b", kind="spike_time", t_ref=10.0)])
+        decoders=[Decoder(port="y", population="b", kind=decoder,
+                          **({"t_ref": 10.0} if decoder == "spike_time" else {}))])
 
 
 LINEAR = LatencyCode(t_max=8, x_min=0.0, x_max=1.0)  # one step = 1/8: x* = 1 + 1/16
@@ -78,7 +80,7 @@ def test_in_range_values_encode_exactly_like_their_clipped_values(values):
 
 
 def test_reject_names_port_count_index_value_and_range():
-    net = _net(LINEAR, split="signed")
+    net = one_layer_net(LINEAR, split="signed")
     x = np.array([[0.5, 3.0, -2.0], [0.1, 0.2, 0.3]])  # frame 0: 3.0 and |-2.0| are out
     with pytest.raises(SimulationError) as info:
         simulate(net, {"x": x}, out_of_range="reject")
@@ -89,7 +91,7 @@ def test_reject_names_port_count_index_value_and_range():
 
 
 def test_reject_is_the_default_warn_and_clip_on_request_are_counted():
-    net = _net(LINEAR)
+    net = one_layer_net(LINEAR)
     x = np.array([0.5, 3.0, 0.25])
     with pytest.raises(SimulationError, match=r"1 of 3 values .* first at index \(1,\) "
                                               r"\(value 3\)"):
@@ -109,7 +111,7 @@ def test_reject_is_the_default_warn_and_clip_on_request_are_counted():
 
 def test_the_error_names_what_the_range_applies_to_and_the_ways_out():
     with pytest.raises(SimulationError) as info:
-        simulate(_net(LINEAR, split="signed"), {"x": np.array([0.5, -3.0, 0.25])})
+        simulate(one_layer_net(LINEAR, split="signed"), {"x": np.array([0.5, -3.0, 0.25])})
     message = str(info.value)
     for part in ("[0, 1] (per sign: |x|)", "value -3", "headroom", "out_of_range='clip'",
                  "--clip"):
@@ -144,12 +146,12 @@ def test_a_mapping_sets_the_policy_per_port_and_ports_left_out_reject():
 def test_nan_and_inf_are_refused_under_every_policy(bad, policy):
     with pytest.raises(SimulationError, match=r"1 of 3 values are NaN or Inf, first at index "
                                               r"\(2,\)"):
-        simulate(_net(LINEAR), {"x": np.array([0.5, 0.5, bad])}, out_of_range=policy)
+        simulate(one_layer_net(LINEAR), {"x": np.array([0.5, 0.5, bad])}, out_of_range=policy)
 
 
 def test_unknown_policy_is_refused():
     with pytest.raises(SimulationError, match="out_of_range='wrap'"):
-        simulate(_net(LINEAR), {"x": np.zeros(3)}, out_of_range="wrap")
+        simulate(one_layer_net(LINEAR), {"x": np.zeros(3)}, out_of_range="wrap")
 
 
 def _program():
