@@ -73,10 +73,13 @@ def charge(
         top = end if b > 0 else np.maximum(v + b, end)
         idle = np.flatnonzero((top >= params.v_th) & (first < 0))
         w = v[idle]
-        if b > 0 and not params.integer:  # k stays float (whole numbers), ops in place
+        if b > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
             k = params.v_th - w
-            k /= b
-            np.ceil(k, out=k)
+            if params.integer:
+                k = -((-k) // b)
+            else:
+                k /= b
+                np.ceil(k, out=k)
             np.clip(k, 1, n + 1, out=k)
             # the rounding checks: the first k with w + k b >= v_th, as the steps add it
             probe = k - 1
@@ -86,11 +89,6 @@ def charge(
             np.multiply(k, b, out=probe)
             probe += w
             k += probe < params.v_th
-        elif b > 0:
-            gap = params.v_th - w
-            k = np.clip(-((-gap) // b), 1, n + 1).astype(np.int64)
-            k = np.where((k > 1) & (w + (k - 1) * b >= params.v_th), k - 1, k)
-            k = np.where(w + k * b < params.v_th, k + 1, k)
         else:
             k = np.where(w + b >= params.v_th, 1, n + 1)
         hit = k <= n
