@@ -26,7 +26,7 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.encoding import Train
-from backends.reference.gate import gate_inputs, is_gated_segment, solve_gated
+from backends.reference.gate import is_gated_segment, solve_gated
 from backends.reference.order import first_spike_steps, order_by_step
 from backends.reference.plan import SimPlan, closed_form_problems
 from backends.reference.result import Activity
@@ -154,7 +154,7 @@ def _solve(
             # the end current u matters only if a later segment takes input (else it is reset)
             need_u = any(s.input_on for s in params.segments[i + 1:])
             u, v = silent(u, v, seg, params, arrivals, n_frames, pop.dims, need_u=need_u)
-        elif (is_gated_segment(seg, params) and (gates := gate_inputs(plan, pid)) is not None
+        elif (is_gated_segment(seg, params) and (gates := plan.gates.get(pid)) is not None
               and (end := solve_gated(plan, pid, gates, seg, params, v, first, spikes, n_frames,
                                       any(s.input_on for s in params.segments[i + 1:])))
               is not None):

@@ -29,15 +29,19 @@ and in float64 whenever the sums are exact (dyadic weights).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.neuron import Segment, StepParams
-from backends.reference.plan import SimPlan
 from backends.reference.stencil import StencilDelivery
+
+if TYPE_CHECKING:
+    from backends.reference.plan import SimPlan
 
 __all__ = ["GateInputs", "gate_inputs", "solve_gated"]
 
@@ -59,8 +63,12 @@ def _one_excitatory_per_target(weights) -> bool:
     return bool((weights >= 0).all() and ((weights != 0).sum(axis=0) <= 1).all())
 
 
-def gate_inputs(plan: SimPlan, pid: str) -> GateInputs | None:
-    """The gated structure of population ``pid``'s inputs, or None (see the module notes).
+def gate_inputs(deliveries: Mapping[str, object], incoming: Sequence[str]) -> GateInputs | None:
+    """The gated structure of a population's inputs, or None (see the module notes).
+
+    ``incoming`` are the ids of its projections, ``deliveries`` their plans;
+    :func:`~backends.reference.plan.build_plan` records the result per population
+    (``SimPlan.gates``), so it is decided once, not per run.
 
     Examples
     --------
@@ -79,12 +87,12 @@ def gate_inputs(plan: SimPlan, pid: str) -> GateInputs | None:
     ...                      produce=("r",), weights=1.5 * np.eye(5))],
     ...   encoders=[Encoder(port="x", population="in",
     ...                     code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))])
-    >>> gate_inputs(build_plan(net), "det")
+    >>> build_plan(net).gates["det"]
     GateInputs(gate='cut', stencils=('train',))
     """
     gate, stencils = None, []
-    for qid in plan.incoming[pid]:
-        dl = plan.deliveries[qid]
+    for qid in incoming:
+        dl = deliveries[qid]
         if isinstance(dl, StencilDelivery) and all((w <= 0).all() for w in dl.tap_weights):
             stencils.append(qid)
         elif (isinstance(dl, MatrixDelivery) and gate is None and len(dl.delays) == 1
@@ -115,7 +123,7 @@ def solve_gated(
     ----------
     plan, pid : the plan and the population.
     gates : GateInputs
-        From :func:`gate_inputs`.
+        From :func:`gate_inputs` (``plan.gates[pid]``).
     seg, params : the segment and the population's constants.
     v, first : ndarray
         Membrane at the segment start and first spike steps (``-1`` none), flat

@@ -10,12 +10,13 @@ plan can be reused across calls of :func:`~backends.reference.simulate`.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import DELIVERY_BUILDERS, Delivery
+from backends.reference.gate import GateInputs, gate_inputs
 from backends.reference.neuron import StepParams
 from compiler.snn.network import Population, SpikingNetwork
 from compiler.snn.projections import Projection
@@ -59,6 +60,8 @@ class SimPlan:
     history: Mapping[str, int]
     #: Why the closed form cannot run the network (:func:`closed_form_problems`; empty: it can).
     closed_problems: tuple[str, ...] = ()
+    #: Fire-once IF populations whose inputs are gated (:mod:`backends.reference.gate`).
+    gates: Mapping[str, GateInputs] = field(default_factory=dict)
 
     @property
     def integer(self) -> bool:
@@ -144,15 +147,19 @@ def build_plan(
     history = {p.id: 1 for p in network.populations}
     for d in deliveries.values():
         history[d.source] = max(history[d.source], max(d.delays) + 1)
+    incoming = {p.id: tuple(q.id for q in network.incoming(p.id)) for p in network.populations}
     return SimPlan(
         network=network,
         arithmetic=arithmetic,
         order=tuple(network.population_order()),
         neurons=neurons,
         deliveries=deliveries,
-        incoming={p.id: tuple(q.id for q in network.incoming(p.id)) for p in network.populations},
+        incoming=incoming,
         history=history,
         closed_problems=tuple(closed_form_problems(network)),
+        gates={pid: gates for pid, params in neurons.items()
+               if params.reset == "fire_once" and params.du == 1.0 and params.dv == 0.0
+               and (gates := gate_inputs(deliveries, incoming[pid])) is not None},
     )
 
 
