@@ -147,6 +147,24 @@ def _jsonable(options: Mapping) -> dict:
     return json.loads(json.dumps(dict(options), default=list))
 
 
+def _network_dir(folder: Path, ref: str, path: Path) -> Path:
+    """``folder/ref`` if it is a real ``networks/<name>`` directory of this artifact.
+
+    A symlink anywhere below ``folder`` (``networks/`` itself or the network's folder)
+    could point outside the artifact, so it is refused, as is a path that leaves it.
+    """
+    networks = folder / "networks"
+    net_dir = folder / str(ref)
+    for part in (networks, net_dir):
+        if part.is_symlink():
+            raise ArtifactError(f"{path}: {part} is a symbolic link; a program artifact's "
+                                "networks/ must be real folders inside it (re-save the program)")
+    if net_dir.resolve().parent != networks.resolve() or \
+            not networks.resolve().is_relative_to(folder.resolve()):
+        raise ArtifactError(f"{path}: network path {ref!r} leaves the artifact's networks/ folder")
+    return net_dir
+
+
 def read_program_manifest(directory: str | Path) -> dict:
     """The checked ``program.json`` of a program artifact (format, version, canonical, digest)."""
     return read_manifest_file(Path(directory) / PROGRAM_FILE, fmt=PROGRAM_FORMAT,
@@ -184,10 +202,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
         for entry in manifest["segments"]:
             if entry["kind"] == "spiking":
                 ref = entry["network"]
-                net_dir = folder / ref["path"]
-                if net_dir.resolve().parent != (folder / "networks").resolve():
-                    raise ArtifactError(f"{path}: network path {ref['path']!r} leaves the "
-                                        "artifact's networks/ folder")
+                net_dir = _network_dir(folder, ref["path"], path)
                 if read_manifest(net_dir)[HASH_KEY] != ref["manifest_sha256"]:
                     raise ArtifactError(f"{net_dir}: not the network this program was saved "
                                         "with (digest differs); re-compile the chain")

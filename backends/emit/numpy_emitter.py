@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from backends.artifact import load
@@ -54,6 +55,41 @@ def _as_program(source: object) -> tuple[CompiledProgram | None, list[SpikingNet
         raise CompileError(f"emit_numpy: source must be a SpikingNetwork, a CompiledProgram or "
                            f"an artifact directory, got {type(source).__name__}")
     return kinds[type(source)](source)
+
+
+#: Top-level modules a generated package imports or runs beside (besides the standard library).
+_SHADOWED = frozenset({"numpy", "builtins", "__main__"})
+
+
+def check_package_name(name: str) -> None:
+    """Refuse a package name that is no identifier or would shadow a module it needs.
+
+    The package is imported from its parent directory (``python -m <name>``), so a
+    name equal to a standard-library module (``sys``, ``json``, ``argparse``...) or to
+    ``numpy`` would replace that module for the generated code and every import after it.
+
+    Raises
+    ------
+    CompileError
+        Naming the package and the reason, with a suggestion.
+
+    Examples
+    --------
+    >>> check_package_name("snn_carrada")
+    >>> check_package_name("json")
+    Traceback (most recent call last):
+    ir.errors.CompileError: package name 'json' would shadow the module 'json' that generated \
+code imports (standard library or numpy); choose another name, e.g. 'snn_json'
+    """
+    str(ident(name))  # validates
+    if name.startswith("_"):
+        raise CompileError(f"package name {name!r} must not start with '_'")
+    shadowed = {m for m in (*sys.stdlib_module_names, *sys.builtin_module_names, *_SHADOWED)
+                if m.lower() == name.lower()}  # case-insensitive file systems too
+    if shadowed:
+        raise CompileError(f"package name {name!r} would shadow the module "
+                           f"{sorted(shadowed)[0]!r} that generated code imports (standard "
+                           f"library or numpy); choose another name, e.g. 'snn_{name}'")
 
 
 def _target_name(program: CompiledProgram | None, networks: list[SpikingNetwork]) -> str:
@@ -122,9 +158,7 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
     program, networks = _as_program(source)
     chain = program.graph.name if program is not None else networks[0].name
     name = name if name is not None else "snn_" + slug(chain)
-    str(ident(name))  # validates
-    if name.startswith("_"):
-        raise CompileError(f"package name {name!r} must not start with '_'")
+    check_package_name(name)
     version = radarsnn_version()
     header = render(template("header.tmpl"), version=comment(version), chain=comment(chain, 80),
                     target=comment(_target_name(program, networks), 80))

@@ -1,8 +1,9 @@
 r"""Safe code rendering: templates filled only with literals and validated identifiers.
 
 Every piece of generated code is a :class:`Code`.  A ``Code`` can only come
-from :func:`lit` (``ascii()`` of a plain number, string, bool, ``None`` or a
-tuple of those), :func:`ident` (a name matching ``[A-Za-z_][A-Za-z0-9_]*`` that
+from :func:`lit` (a plain number, bool, ``None``, a string as a single-quoted
+literal of printable ASCII with every quote, backslash and other character escaped,
+or a tuple of those), :func:`ident` (a name matching ``[A-Za-z_][A-Za-z0-9_]*`` that
 is not a keyword), :func:`render` (a template whose ``$fields`` are all
 ``Code``) or :func:`join`.  A raw ``str`` is refused wherever code is
 expected, so a node id, a name or metadata from a chain file can only ever
@@ -15,9 +16,9 @@ Templates are :class:`string.Template` texts: the files of
 Examples
 --------
 >>> print(render("x = $value  # $note", value=lit(0.5), note=comment("a'b\nc")))
-x = 0.5  # "a'b\nc"
+x = 0.5  # 'a\x27b\nc'
 >>> print(lit("__import__('os')"))
-"__import__('os')"
+'__import__(\x27os\x27)'
 >>> ident("not valid")
 Traceback (most recent call last):
 ir.errors.CompileError: generated name 'not valid' is not a valid Python identifier
@@ -77,10 +78,10 @@ def _literal(value: object) -> str:
             return 'float("inf")' if value > 0 else '-float("inf")'
         return repr(float(value))
     if isinstance(value, str):
-        if len(value) <= _CHUNK:
-            return ascii(value)
-        parts = [ascii(value[i:i + _CHUNK]) for i in range(0, len(value), _CHUNK)]
-        return "(\n" + "\n".join(f"    {p}" for p in parts) + "\n)"
+        text = _quote(value)
+        if len(text) <= _CHUNK + 2:
+            return text
+        return "(\n" + "\n".join(f"    '{p}'" for p in _chunks(text[1:-1])) + "\n)"
     if isinstance(value, tuple):
         items = [_literal(v) for v in value]
         flat = "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
@@ -89,6 +90,38 @@ def _literal(value: object) -> str:
         return "(\n" + "".join(f"    {item},\n" for item in items) + ")"
     raise CompileError(f"cannot emit a literal of type {type(value).__name__}: only None, bool, "
                        "int, float, str and tuples of them are written into generated code")
+
+
+def _quote(text: str) -> str:
+    r"""``text`` as a single-quoted literal of printable ASCII without quotes or backslashes.
+
+    Every character outside ``[ -~]``, and ``'``, ``"`` and ``\``, is written as an escape
+    (``\x27``, ``\n``, ``\u202e``...), so the literal cannot close a string or a
+    docstring it is placed in, nor end a comment line.
+
+    Examples
+    --------
+    >>> print(_quote("a'\"b\\\n\u00e9"))
+    'a\x27\x22b\x5c\n\xe9'
+    """
+    return "'" + "".join(_ESCAPES.get(c) or (c if " " <= c <= "~" else ascii(c)[1:-1])
+                         for c in text) + "'"
+
+
+def _chunks(body: str) -> list[str]:
+    """``body`` (an escaped literal's inside) cut into pieces of about ``_CHUNK`` characters,
+    never inside an escape."""
+    pieces = re.findall(r"\\(?:x..|u....|U........|.)|[^\\]", body)
+    out, cur = [], ""
+    for piece in pieces:
+        if len(cur) + len(piece) > _CHUNK:
+            out.append(cur)
+            cur = ""
+        cur += piece
+    return [*out, cur]
+
+
+_ESCAPES = {"'": "\\x27", '"': "\\x22", "\\": "\\x5c"}
 
 
 def lit(value: object) -> Code:
@@ -137,15 +170,17 @@ def ident(name: str) -> Code:
 def comment(text: str, limit: int = 60) -> Code:
     r"""An ASCII literal of ``text`` for use after ``#``, cut to ``limit`` characters.
 
-    ``ascii()`` escapes newlines and every non-ASCII character, so the comment
-    cannot end early (a cut inside an escape only shortens the comment).
+    Newlines, quotes, backslashes and every non-ASCII character are escaped, so the
+    comment cannot end early (a cut inside an escape only shortens the comment).
+    Comments never reach lines 1-2 of a generated file (whose text is fixed), so no
+    user text can be read as a PEP 263 ``coding:`` declaration.
 
     Examples
     --------
     >>> print(comment("line\nbreak"))
     'line\nbreak'
     """
-    text = ascii(str(text))
+    text = _quote(str(text))
     return _code(text if len(text) <= limit else text[:limit] + "...")
 
 

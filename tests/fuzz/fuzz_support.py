@@ -74,6 +74,9 @@ HOSTILE_STRINGS = [
     "&a [*a, *a]", "!!python/object:os.system", "- - -", "{", "[", "]", ":", "#",
     "\u202etxt.exe", "\u2028", "ß\u0301", "\ud7ff", "日本語", "x" * 300, "1e999", "NaN",
     "-0", "0x10", "True", "null", "~",
+    # PEP 263 source-encoding declarations (a generated file's lines 1-2 must never hold them)
+    "coding:utf-7+AAo-open('pwned','w')+AAo-#", "# -*- Coding: rot13 -*-", "CODING=utf_16",
+    "vim: set fileencoding=latin-1 :", "\ncoding:utf-7\n", '"' * 3, "'" * 3, "\\",
 ]
 
 #: JSON-able junk for any field.
