@@ -6,7 +6,9 @@ matrix projections from any earlier population, or by a stencil from an
 earlier population of the same axes.  Weights, thresholds and biases are
 dyadic (float64) or whole (int64); decays, delays, phase schedules (silent,
 charging, input cuts, spiking clamps), latency and rate codes are random.
-Sizes stay small so that 500 examples of each arithmetic run in seconds.
+Some populations carry per-neuron parameter scales (powers of two, or any
+positive floats on the driven path).  Sizes stay small so that 500 examples of
+each arithmetic run in seconds.
 """
 
 from __future__ import annotations
@@ -76,6 +78,17 @@ def _params(rng: np.random.Generator, n_steps: int, numbers: str) -> NeuronParam
     return NeuronParams(du=du, dv=dv, v_th=v_th, reset="fire_once", phases=tuple(phases))
 
 
+def _with_scales(rng: np.random.Generator, params: NeuronParams, shape: dict[str, int],
+                 numbers: str) -> NeuronParams:
+    """``params`` with per-neuron scales along a random axis (40 % of populations)."""
+    if rng.random() >= 0.4:
+        return params
+    axis = str(rng.choice(sorted(shape)))
+    scales = (rng.uniform(0.2, 5.0, shape[axis]) if numbers == "real"
+              else 2.0 ** rng.integers(0, 4, shape[axis]))
+    return params.model_copy(update={"scale_axis": axis, "scales": tuple(map(float, scales))})
+
+
 def _matrix(rng, pid, src, tgt, numbers) -> MatrixProjection:
     (i_axis,) = (a for a in src.axes if a != "r")
     (o_axis,) = (a for a in tgt.axes if a != "r")
@@ -107,6 +120,7 @@ def _stencil(rng, pid, src, tgt, numbers) -> StencilProjection:
 def random_network(seed: int, numbers: str) -> tuple[SpikingNetwork, dict[str, np.ndarray]]:
     """A random eligible network and inputs from one seed; numbers: int, dyadic or real."""
     rng = np.random.default_rng(seed)
+    srng = np.random.default_rng([seed, 7])  # per-neuron scales: a stream of their own
     n_steps, reps = int(rng.integers(3, 30)), int(rng.integers(1, 4))
     src = Population(id="p0", shape=_shuffled(rng, {"r": reps, "i0": int(rng.integers(1, 6))}),
                      source=True)
@@ -116,7 +130,8 @@ def random_network(seed: int, numbers: str) -> tuple[SpikingNetwork, dict[str, n
         stencil = rng.random() < 0.35
         shape = dict(base.shape) if stencil else {"r": reps, f"i{layer}": int(rng.integers(1, 6))}
         pop = Population(id=f"p{layer}", shape=_shuffled(rng, shape),
-                         params=_params(rng, n_steps, numbers))
+                         params=_with_scales(srng, _params(rng, n_steps, numbers), shape,
+                                             numbers))
         if stencil:
             projs.append(_stencil(rng, f"s{layer}", base, pop, numbers))
         feeders = rng.choice(len(pops), size=int(rng.integers(0 if stencil else 1, 3)))

@@ -123,6 +123,9 @@ def build_model(
                             for name in ("bias", "input_on", "spiking_on")}}
             group = b2.NeuronGroup(n, code.model, threshold=code.threshold, reset=code.reset,
                                    namespace=namespace, dt=1 * ms)
+            scale = pop.params.scale_of(pop.shape)
+            if scale is not None:
+                group.c = np.tile(scale, n_frames)
             updater = group.run_regularly(code.update, dt=1 * ms)
             _at(updater, k, 1)
             _at(group.thresholder["spike"], k, 2)

@@ -98,11 +98,17 @@ def neuron_code(params: NeuronParams, n_steps: int) -> NeuronCode:
     ('v = v_reset', 0.75, [1.0, 1.0])
     """
     bias, input_on, spiking_on = params.schedule(n_steps)
+    model, update, reset = MODEL, UPDATE, RESETS[params.reset]
     threshold = "v >= v_th and spiking_on(t) > 0.5"
+    if params.scale_axis is not None:  # per-neuron scales: a constant c per neuron
+        model += "\nc : 1 (constant)"
+        update = update.replace("u + bias(t)", "u + c * bias(t)")
+        threshold = threshold.replace("v_th", "c * v_th")
+        reset = reset.replace("v_th", "c * v_th").replace("= v_reset", "= c * v_reset")
     if params.reset == "fire_once":
         threshold += " and not fired"
     return NeuronCode(
-        model=MODEL, update=UPDATE, threshold=threshold, reset=RESETS[params.reset],
+        model=model, update=update, threshold=threshold, reset=reset,
         constants={"keep_u": 1.0 - float(params.du), "keep_v": 1.0 - float(params.dv),
                    "v_th": float(params.v_th), "v_reset": float(params.v_reset)},
         bias=bias.astype(np.float64), input_on=input_on.astype(np.float64),

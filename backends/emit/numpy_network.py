@@ -59,16 +59,21 @@ def _decayed(var: str, d: float, integer: bool) -> Code:
     return render("$keep * $x", keep=lit(1.0 - d), x=name)
 
 
+def _scaled(sp_: StepParams, value: float | int) -> Code:
+    """A threshold, reset or bias constant, times the per-neuron scales ``c`` if any."""
+    return lit(value) if sp_.scale is None else render("$x * c", x=lit(value))
+
+
 def _phase(sp_: StepParams, bias: float | int, input_on: bool, spiking_on: bool) -> Code:
     lines = []
     if input_on:
         lines.append(render("u = $u + current", u=_decayed("u", sp_.du, sp_.integer)))
-        term = render("u") if bias == 0 else render("(u + $b)", b=lit(bias))
+        term = render("u") if bias == 0 else render("(u + $b)", b=_scaled(sp_, bias))
     else:
         lines.append(render("u = np.zeros_like(u)"))
-        term = lit(bias)
+        term = lit(bias) if bias == 0 else _scaled(sp_, bias)
     lines.append(render("v = $v + $term", v=_decayed("v", sp_.dv, sp_.integer), term=term))
-    lines.append(render("spikes = v >= $th", th=lit(sp_.v_th)) if spiking_on
+    lines.append(render("spikes = v >= $th", th=_scaled(sp_, sp_.v_th)) if spiking_on
                  else render("spikes = np.zeros(v.shape, bool)"))
     return join(lines)
 
@@ -87,9 +92,13 @@ def update_function(pkg: PackageBuilder, module: str, pop: Population, sp_: Step
                     render("elif t < $e:", e=lit(s.stop)))
             parts += [head, indent(_phase(sp_, s.bias, s.input_on, s.spiking_on))]
         phases = indent(join(parts))
+    if sp_.scale is not None:  # per-neuron scales, one per neuron (broadcast over frames)
+        key = pkg.store(module, fn, 0, "scale", sp_.scale)
+        phases = join([indent(render("c = _kernels.array($k, 0, 'scale')", k=lit(key))),
+                       phases])
     reset = {"fire_once": render("spikes &= ~fired"),
-             "value": render("v = np.where(spikes, $r, v)", r=lit(sp_.v_reset)),
-             "subtract": render("v = np.where(spikes, v - $th, v)", th=lit(sp_.v_th))}
+             "value": render("v = np.where(spikes, $r, v)", r=_scaled(sp_, sp_.v_reset)),
+             "subtract": render("v = np.where(spikes, v - $th, v)", th=_scaled(sp_, sp_.v_th))}
     summary = render("du=$du, dv=$dv, $n phase(s)\n    # v_th=$th, reset $reset", du=lit(sp_.du),
                      dv=lit(sp_.dv), th=lit(sp_.v_th), n=lit(len(segs)), reset=lit(sp_.reset))
     pkg.add(module, render(template("update.tmpl"), fn=ident(fn), summary=summary,

@@ -50,7 +50,7 @@ import nir
 import numpy as np
 
 from backends.brian2.synapses import dense_weights, expand_projection
-from backends.nir.neurons import bias_of, neuron_nodes, origin_node
+from backends.nir.neurons import bias_of, neuron_nodes, origin_node, scaled_bias
 from backends.nir.report import ExportReport
 from compiler.program import CompiledProgram
 from compiler.snn.network import SpikingNetwork
@@ -141,7 +141,7 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
             lin = nir_name(f"{proj.id}.d{d}", prefix)
             meta = _meta(projection=proj.id, node=origin_node(proj.id, proj.origin), delay_steps=d)
             if affine_bias.get(proj.target) == proj.id and d == delays[0]:
-                bias = np.full(tgt.size, bias_of(tgt))
+                bias = scaled_bias(tgt)
                 _put(nodes, lin, nir.Affine(weight=w, bias=bias, metadata=meta), proj.id)
             else:
                 _put(nodes, lin, nir.Linear(weight=w, metadata=meta), proj.id)

@@ -45,7 +45,7 @@ import numpy as np
 from backends.nir.report import ExportReport
 from compiler.snn.network import Population
 
-__all__ = ["neuron_nodes", "bias_of", "params_json", "origin_node"]
+__all__ = ["neuron_nodes", "bias_of", "params_json", "origin_node", "scaled_bias"]
 
 
 def origin_node(item_id: str, origin: dict) -> str:
@@ -83,6 +83,17 @@ def _full(pop: Population, value: float) -> np.ndarray:
     return np.full(pop.size, float(value))
 
 
+def _scaled(pop: Population, value: float) -> np.ndarray:
+    """``value`` per neuron times its per-neuron scale (thresholds, resets, biases)."""
+    scale = pop.params.scale_of(pop.shape)
+    return _full(pop, value) if scale is None else float(value) * scale
+
+
+def scaled_bias(pop: Population) -> np.ndarray:
+    """The constant bias of :func:`bias_of` per neuron (per-neuron scales applied)."""
+    return _scaled(pop, bias_of(pop) or 0.0)
+
+
 def neuron_nodes(
     pop: Population, name: str, dt_s: float, report: ExportReport, bias_elsewhere: bool = False
 ) -> tuple[dict[str, nir.NIRNode], str, str]:
@@ -112,11 +123,11 @@ def neuron_nodes(
     meta = {"radarsnn_population": pid, "radarsnn_node": origin_node(pop.id, pop.origin),
             "radarsnn_motif": pop.origin.get("motif", ""), "radarsnn_params": params_json(pop)}
     bias = bias_of(pop)
-    threshold = _full(pop, np.nextafter(p.v_th, -np.inf))
+    threshold = np.nextafter(_scaled(pop, p.v_th), -np.inf)
     report.add(pid, "threshold", "lowered",
                f"v >= {p.v_th:g} exported as NIR v > nextafter({p.v_th:g}, -inf)")
     if p.reset == "value":
-        v_reset = _full(pop, p.v_reset)
+        v_reset = _scaled(pop, p.v_reset)
         report.add(pid, "reset", "exact", f"reset to v_reset = {p.v_reset:g}")
     else:
         v_reset = _full(pop, 0.0)
@@ -144,7 +155,7 @@ def neuron_nodes(
     if 0.0 < p.du < 1.0 and p.dv > 0:
         nodes[name] = nir.CubaLIF(
             tau_syn=_full(pop, dt_s / p.du), tau_mem=_full(pop, dt_s / p.dv),
-            r=_full(pop, 1.0 / p.dv), v_leak=_full(pop, leak_bias / p.dv),
+            r=_full(pop, 1.0 / p.dv), v_leak=_scaled(pop, leak_bias / p.dv),
             v_threshold=threshold, v_reset=v_reset, w_in=_full(pop, 1.0 / p.du), metadata=meta)
         report.add(pid, "neuron", "exact", f"CubaLIF {name}")
         return nodes, name, name
@@ -161,7 +172,7 @@ def neuron_nodes(
                              metadata=meta)
     else:
         nodes[name] = nir.LIF(tau=_full(pop, dt_s / p.dv), r=_full(pop, 1.0 / p.dv),
-                              v_leak=_full(pop, leak_bias / p.dv), v_threshold=threshold,
+                              v_leak=_scaled(pop, leak_bias / p.dv), v_threshold=threshold,
                               v_reset=v_reset, metadata=meta)
     kinds = " -> ".join(type(n).__name__ for n in nodes.values())
     report.add(pid, "neuron", "exact" if len(nodes) == 1 else "lowered",

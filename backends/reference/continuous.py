@@ -108,7 +108,11 @@ simulate it with backends.reference.simulate (mode 'step' or 'closed')
         if p.source:
             continue
         q, ph = p.params, p.params.phases
-        if q.reset != "fire_once" or q.dv != 0.0 or q.du not in (0.0, 1.0):
+        if q.scale_axis is not None:
+            out.append(f"population {p.id!r}: per-neuron scales along {q.scale_axis!r} are not "
+                       "supported in continuous time; simulate it with "
+                       "backends.reference.simulate (mode 'step' or 'closed')")
+        elif q.reset != "fire_once" or q.dv != 0.0 or q.du not in (0.0, 1.0):
             out.append(f"population {p.id!r}: the continuous form needs reset='fire_once', "
                        f"dv=0, du in (0, 1); got {q.reset!r}, dv={q.dv}, du={q.du}")
         elif q.du == 1.0 and any(not x.input_on or x.bias != 0.0 for x in ph):

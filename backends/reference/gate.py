@@ -106,7 +106,7 @@ def gate_inputs(deliveries: Mapping[str, object], incoming: Sequence[str]) -> Ga
 def is_gated_segment(seg: Segment, params: StepParams) -> bool:
     """Whether ``seg`` integrates without leak or bias with input and spiking on."""
     return (seg.input_on and seg.spiking_on and params.du == 1.0 and params.dv == 0.0
-            and seg.bias == 0)
+            and seg.bias == 0 and params.scale is None)
 
 
 def _single(flat: np.ndarray, n: int) -> bool:

@@ -86,7 +86,13 @@ class LiveNeurons:
         once = params.reset == "fire_once"
         # fire-once: which neurons may still fire; in float64 as a threshold per neuron that
         # becomes NaN once it fired (v >= NaN is False): one comparison for both conditions
-        self._threshold = np.full(n, params.v_th, np.float64) if once and not integer else None
+        # per-neuron scales: threshold, reset and each bias as arrays over the n neurons
+        self._v_th = params.per_neuron(params.v_th, n)
+        self._v_reset = params.per_neuron(params.v_reset, n)
+        self._scaled_bias = {} if params.scale is None else {
+            b: params.per_neuron(b, n) for b in set(params.bias.tolist())}
+        self._threshold = (np.array(np.broadcast_to(self._v_th, (n,)), np.float64)
+                           if once and not integer else None)
         self._armed = np.ones(n, bool) if once and integer else None
         self._n_armed = n
         self._input_on = params.input_on.tolist()
@@ -172,7 +178,16 @@ class LiveNeurons:
             else:
                 np.multiply(v, self._keep_v, out=v)
             self._clean = False
-        if self._u_zero:
+        if self._scaled_bias and b != 0:  # per-neuron bias c·b: v + (u + c·b)
+            cb = self._scaled_bias[b]
+            if self._u_zero:
+                np.add(v, cb + 0 if p.integer else cb + 0.0, out=v)
+            else:
+                term = self._scratch_buffer()
+                np.add(self.u, cb, out=term)
+                np.add(v, term, out=v)
+            self._clean = False
+        elif self._u_zero:
             b = b + 0 if p.integer else b + 0.0  # u + b with u = +0
             if b != 0 or self._signed_v:
                 np.add(v, b, out=v)
@@ -197,7 +212,7 @@ class LiveNeurons:
         if threshold is not None:
             np.greater_equal(v, threshold, out=spikes)
         else:
-            np.greater_equal(v, p.v_th, out=spikes)
+            np.greater_equal(v, self._v_th, out=spikes)
             if armed is not None:
                 np.logical_and(spikes, armed, out=spikes)
         if not spikes.any():
@@ -212,7 +227,7 @@ class LiveNeurons:
             self._n_armed -= fired.size
             self._clean = True
         elif p.reset == "value":
-            v[fired] = p.v_reset
+            v[fired] = self._v_reset if np.ndim(self._v_reset) == 0 else self._v_reset[fired]
         else:
-            v[fired] -= p.v_th
+            v[fired] -= self._v_th if np.ndim(self._v_th) == 0 else self._v_th[fired]
         return fired

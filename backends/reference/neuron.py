@@ -98,6 +98,11 @@ class StepParams:
         The phase schedule clipped to ``[0, n_steps)``.
     integer : bool
         Integer (fixed-point) arithmetic.
+    scale : ndarray or None
+        Per-neuron parameter scales flattened over the population (``None``: all 1;
+        :attr:`compiler.snn.NeuronParams.scales`): neuron ``i`` uses ``scale[i]·v_th``,
+        ``scale[i]·v_reset`` and ``scale[i]·bias[t]``.  State arrays hold whole frames of
+        neurons, so :meth:`per_neuron` tiles it over the frames.
     """
 
     du: float
@@ -110,9 +115,27 @@ class StepParams:
     spiking_on: np.ndarray
     segments: tuple[Segment, ...]
     integer: bool = False
+    scale: np.ndarray | None = None
+
+    def per_neuron(self, value: float | int, n: int) -> float | int | np.ndarray:
+        """``value`` for each of ``n`` neurons (whole frames): scalar without scales.
+
+        Examples
+        --------
+        >>> from compiler.snn import NeuronParams
+        >>> p = StepParams.from_params(NeuronParams(v_th=2.0, scale_axis="r", scales=(1, 4)),
+        ...                            n_steps=1, shape={"r": 2})
+        >>> p.per_neuron(p.v_th, 4).tolist(), StepParams.from_params(NeuronParams(), 1).per_neuron(
+        ...     3.0, 4)
+        ([2.0, 8.0, 2.0, 8.0], 3.0)
+        """
+        if self.scale is None:
+            return value
+        return value * np.tile(self.scale, n // self.scale.size)
 
     @classmethod
-    def from_params(cls, params: NeuronParams, n_steps: int, integer: bool = False) -> StepParams:
+    def from_params(cls, params: NeuronParams, n_steps: int, integer: bool = False,
+                    shape: dict[str, int] | None = None) -> StepParams:
         """Resolve a population's :class:`~compiler.snn.NeuronParams` over ``n_steps`` steps.
 
         Parameters
@@ -123,6 +146,8 @@ class StepParams:
             Steps per frame.
         integer : bool
             Convert thresholds, resets and biases to integers.
+        shape : dict, optional
+            The population's shape (needed when ``params`` has per-neuron scales).
 
         Returns
         -------
@@ -154,7 +179,18 @@ class StepParams:
             spiking_on=spiking_on,
             segments=segments,
             integer=integer,
+            scale=_flat_scale(params, shape, integer),
         )
+
+
+def _flat_scale(params: NeuronParams, shape: dict[str, int] | None,
+                integer: bool) -> np.ndarray | None:
+    if params.scale_axis is None:
+        return None
+    if shape is None:
+        raise ValueError("per-neuron scales need the population's shape")
+    scale = params.scale_of(shape)
+    return scale.astype(np.int64) if integer else scale
 
 
 def decay(x: np.ndarray, d: float, integer: bool = False) -> np.ndarray:
@@ -234,15 +270,17 @@ def neuron_step(
         u = decay(state.u, params.du, params.integer) + current
     else:
         u = np.zeros_like(state.u)
-    v = decay(state.v, params.dv, params.integer) + (u + params.bias[t])
+    n = state.v.size
+    v = decay(state.v, params.dv, params.integer) + (u + params.per_neuron(params.bias[t], n))
+    v_th = params.per_neuron(params.v_th, n)
     if params.spiking_on[t]:
-        spikes = v >= params.v_th
+        spikes = v >= v_th
     else:
         spikes = np.zeros(v.shape, bool)
     if params.reset == "fire_once":
         spikes &= ~state.fired
     elif params.reset == "value":
-        v = np.where(spikes, params.v_reset, v)
+        v = np.where(spikes, params.per_neuron(params.v_reset, n), v)
     else:
-        v = np.where(spikes, v - params.v_th, v)
+        v = np.where(spikes, v - v_th, v)
     return spikes, NeuronState(u, v, state.fired | spikes)

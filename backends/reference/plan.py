@@ -136,7 +136,7 @@ def build_plan(
                                   f"known kinds: {sorted(builders)}", node=proj.id)
     if integer:
         _check_integer(network)
-    neurons = {p.id: StepParams.from_params(p.params, network.n_steps, integer)
+    neurons = {p.id: StepParams.from_params(p.params, network.n_steps, integer, p.shape)
                for p in network.populations if not p.source}
     deliveries = {q.id: builders[q.kind](q, pops[q.source], pops[q.target], integer)
                   for q in network.projections}

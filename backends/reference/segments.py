@@ -65,16 +65,19 @@ def charge(
     can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
     step arithmetic runs on those candidates alone.
     """
-    n, b = seg.stop - seg.start, seg.bias
-    if b == 0 and not seg.spiking_on:
+    n, b0 = seg.stop - seg.start, seg.bias
+    if b0 == 0 and not seg.spiking_on:
         return np.zeros(v.shape, v.dtype), v
-    end = v + n * b
+    b_all = params.per_neuron(b0, v.size)  # per-neuron scales: c·b and c·v_th per neuron
+    end = v + n * b_all
     if seg.spiking_on:
-        top = end if b > 0 else np.maximum(v + b, end)
-        idle = np.flatnonzero((top >= params.v_th) & (first < 0))
+        v_th_all = params.per_neuron(params.v_th, v.size)
+        top = end if b0 > 0 else np.maximum(v + b_all, end)
+        idle = np.flatnonzero((top >= v_th_all) & (first < 0))
         w = v[idle]
-        if b > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
-            k = params.v_th - w
+        b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
+        if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
+            k = v_th - w
             if params.integer:
                 k = -((-k) // b)
             else:
@@ -85,12 +88,12 @@ def charge(
             probe = k - 1
             probe *= b
             probe += w
-            k -= (k > 1) & (probe >= params.v_th)
+            k -= (k > 1) & (probe >= v_th)
             np.multiply(k, b, out=probe)
             probe += w
-            k += probe < params.v_th
+            k += probe < v_th
         else:
-            k = np.where(w + b >= params.v_th, 1, n + 1)
+            k = np.where(w + b >= v_th, 1, n + 1)
         hit = k <= n
         first[idle[hit]] = seg.start + k[hit].astype(np.int64) - 1
     return np.zeros(v.shape, v.dtype), end
@@ -105,7 +108,8 @@ def silent(
     With ``du = 0`` and ``need_u`` False the end current (``u + Σ w``) is not
     computed: no later segment reads it (the caller checked), saving one product.
     """
-    s0, s1, b = seg.start, seg.stop, seg.bias
+    s0, s1 = seg.start, seg.stop
+    b = params.per_neuron(seg.bias, u.size) if seg.bias != 0 else seg.bias
     total = np.zeros((n_frames, *dims), u.dtype)
     second = np.zeros(total.shape, total.dtype)
     for arr in arrivals:
@@ -124,7 +128,7 @@ def silent(
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
     total, second = total.reshape(u.shape), second.reshape(u.shape)
     if params.du == 0.0 and s0 == 0:  # the first segment: u = v = 0, skip the zero terms
-        return total, second if b == 0 else second + s1 * b
+        return total, second if seg.bias == 0 else second + s1 * b
     if params.du == 0.0:
         return u + total, v + (s1 - s0) * (u + b) + second
     return second, v + (s1 - s0) * b + total
@@ -150,9 +154,10 @@ def driven(
     drive = drive.reshape(n_t, -1)
     if params.dv == 0.0 and params.du in (0.0, 1.0):
         cur = np.cumsum(np.vstack([u[None], drive]), axis=0)[1:] if params.du == 0.0 else drive
-        vs = np.cumsum(np.vstack([v[None], cur + seg.bias]), axis=0)[1:]
+        vs = np.cumsum(np.vstack([v[None], cur + params.per_neuron(seg.bias, v.size)]),
+                       axis=0)[1:]
         if seg.spiking_on:
-            cross = vs >= params.v_th
+            cross = vs >= params.per_neuron(params.v_th, v.size)
             hit = cross.any(axis=0) & (first < 0)
             first[hit] = s0 + cross.argmax(axis=0)[hit]
         return cur[-1].copy(), vs[-1].copy()

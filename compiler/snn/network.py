@@ -211,6 +211,14 @@ class SpikingNetwork:
                 raise NetworkError(f"decoder {dec.port!r}: a spike source {dec.population!r} has "
                                    "no membrane; use kind 'spike_time', 'count' or 'spiked'",
                                    node=dec.port)
+        for p in self.populations:
+            par = p.params
+            if par.scale_axis is not None and (par.scale_axis not in p.shape or
+                                               p.shape[par.scale_axis] != len(par.scales)):
+                raise NetworkError(
+                    f"population {p.id!r}: {len(par.scales)} per-neuron scales along "
+                    f"{par.scale_axis!r}, but its shape is {dict(p.shape)}; give one scale per "
+                    "index of an axis of the population", node=p.id)
         fed = {e.population for e in self.encoders}
         for p in self.populations:
             if p.source and p.id not in fed:

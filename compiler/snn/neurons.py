@@ -104,6 +104,18 @@ class NeuronParams(BaseModel):
         Membrane value after a spike with ``reset="value"``.
     phases : tuple of Phase
         The bias / input / spiking schedule; starts at step 0, strictly increasing.
+    scale_axis : str, optional
+        An axis of the population along which each neuron has its own **parameter
+        scale** ``c_i = scales[i]``: its threshold, reset value and every bias are
+        ``c_i`` times the shared ones (``c_i·v_th``, ``c_i·v_reset``, ``c_i·b(t)``).
+        A non-leaky ramp neuron with scale ``c`` fires when ``V/c + B(k) ≥ v_th``: it
+        reads its membrane ``c`` times coarser, so one population can give each index
+        of that axis its own full scale (the per-neuron gains of the time-coded motifs;
+        on a chip: per-neuron bias exponents and thresholds, or per-neuron initial
+        membranes, see ``docs/hardware.md``).
+    scales : tuple of float
+        One positive scale per index of ``scale_axis`` (whole numbers in integer
+        arithmetic).
 
     Examples
     --------
@@ -121,6 +133,8 @@ class NeuronParams(BaseModel):
     reset: ResetMode = "subtract"
     v_reset: float = 0.0
     phases: tuple[Phase, ...] = (Phase(start_step=0),)
+    scale_axis: str | None = None
+    scales: tuple[float, ...] = ()
 
     @field_validator("v_th")
     @classmethod
@@ -144,6 +158,33 @@ class NeuronParams(BaseModel):
         if any(b <= a for a, b in zip(starts, starts[1:], strict=False)):
             raise ValueError(f"phase start steps must increase strictly, got {starts}")
         return self
+
+    @model_validator(mode="after")
+    def _scales(self) -> NeuronParams:
+        if (self.scale_axis is None) != (not self.scales):
+            raise ValueError("scale_axis and scales go together: give both or neither, got "
+                             f"scale_axis={self.scale_axis!r} and {len(self.scales)} scales")
+        bad = [c for c in self.scales if not (np.isfinite(c) and c > 0)]
+        if bad:
+            raise ValueError(f"per-neuron scales must be positive finite numbers, got {bad[:3]}")
+        return self
+
+    def scale_of(self, shape: dict[str, int]) -> np.ndarray | None:
+        """The per-neuron scales flattened over a population of ``shape`` (None: no scales).
+
+        Examples
+        --------
+        >>> p = NeuronParams(scale_axis="r", scales=(1.0, 4.0))
+        >>> p.scale_of({"r": 2, "part": 2}).tolist()
+        [1.0, 1.0, 4.0, 4.0]
+        """
+        if self.scale_axis is None:
+            return None
+        axes = list(shape)
+        view = [1] * len(axes)
+        view[axes.index(self.scale_axis)] = len(self.scales)
+        c = np.asarray(self.scales, dtype=np.float64).reshape(view)
+        return np.broadcast_to(c, tuple(shape.values())).reshape(-1).copy()
 
     @property
     def is_ramp(self) -> bool:
@@ -192,6 +233,6 @@ class NeuronParams(BaseModel):
         >>> NeuronParams(v_th=1.5).is_integer()
         False
         """
-        values = [self.v_th, self.v_reset, *(p.bias for p in self.phases)]
+        values = [self.v_th, self.v_reset, *(p.bias for p in self.phases), *self.scales]
         decays = [self.du * DECAY_ONE, self.dv * DECAY_ONE]
         return all(float(x).is_integer() for x in values + decays)
