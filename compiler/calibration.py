@@ -71,6 +71,10 @@ class NodeCalibration:
     axis_quantiles : dict of str to tuple of float
         Per axis, :data:`N_QUANTILES` quantiles of the parts divided by their index's
         maximum (the part values under per-index gains ``1/m``).
+    second_moments : dict of str to ndarray
+        Per axis a linear consumer contracts (integer targets only): ``E[p pᵀ]`` of the
+        ± part vectors along it, rows ``(index, part)`` — what
+        :func:`compiler.quantize_weights.rint_feedback` rounds the layer's weights against.
     """
 
     node: str
@@ -86,6 +90,8 @@ class NodeCalibration:
     source: Literal["inputs", "bounds"] = "inputs"
     axis_max: dict[str, tuple[float, ...]] = field(default_factory=dict)
     axis_quantiles: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    second_moments: dict[str, np.ndarray] = field(default_factory=dict, compare=False,
+                                                  repr=False)
 
     @property
     def max_part(self) -> float:
@@ -95,6 +101,7 @@ class NodeCalibration:
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
         d = asdict(self)
+        d.pop("second_moments", None)  # compile-time only (matrices), not part of records
         d["part_quantiles"] = list(self.part_quantiles)
         d["abs_quantiles"] = list(self.abs_quantiles)
         d["normalize_axes"] = list(self.normalize_axes)
@@ -298,3 +305,39 @@ def synthetic_inputs(graph, *, seed: int = 0,
                                "inputs (--calibration NODE=X.npy)", node=node)
         out[node] = generators[t.domain](rng, tuple(t.axes.values()), bool(t.complex))
     return out
+
+
+#: Largest part vector (index × parts) whose second moment calibration keeps (32 MB).
+MAX_MOMENT_ROWS = 2048
+
+
+def second_moment(values: np.ndarray, axis: int, split: str) -> np.ndarray | None:
+    """``E[p pᵀ]`` of the ± part vectors of ``values`` along ``axis`` (rows ``(index, part)``).
+
+    Parameters
+    ----------
+    values : ndarray
+        Calibration values, any leading frames axis included.
+    axis : int
+        The contracted axis.
+    split : str
+        The encoder's part split (``signed`` for real, ``re_im_signed`` for complex).
+
+    Returns
+    -------
+    ndarray or None
+        ``(n·P, n·P)``; None beyond :data:`MAX_MOMENT_ROWS` rows.
+
+    Examples
+    --------
+    >>> second_moment(np.array([[1.0, -2.0]]), axis=1, split="signed").tolist()
+    [[1.0, 0.0, 0.0, 2.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 4.0]]
+    """
+    from compiler.snn.coding import split_values
+
+    parts = split_values(np.moveaxis(np.asarray(values), axis, -1), split)
+    rows = parts.shape[-2] * parts.shape[-1]
+    if rows > MAX_MOMENT_ROWS:
+        return None
+    v = parts.reshape(-1, rows)
+    return (v.T @ v) / max(1, v.shape[0])

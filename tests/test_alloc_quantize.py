@@ -62,19 +62,28 @@ def test_unbounded_changes_nothing():
     assert q.projection["w"].weights.tolist() == [[0.3]] and rec.projections == {}
 
 
-def test_threshold_beyond_its_bits_coarsens_the_weights():
-    # v_th = 1e4 at weight 1: 17 bits hold 65 535, so the scale grows from 1/127 to 1e4/65535.5
-    net, rec = quantize(small(np.array([[1.0]]), v_th=1e4), load_profile("loihi"))
+def test_threshold_beyond_its_range_coarsens_the_weights():
+    # loihi thresholds: a 17-bit mantissa << 6, at most 8 388 544 state units.  v_th = 2e4
+    # at weight 0.3: the unit grows from 0.3/127 to 2e4/8388543.5, the weight 0.3 -> 126
+    net, rec = quantize(small(np.array([[0.3]]), v_th=2e4), load_profile("loihi"))
     info = rec.populations[net.populations[1].id]
-    assert info["weights_coarsened_for_threshold"]
-    assert net.populations[1].params.v_th <= 65535
-    assert net.projections[0].weights[0, 0] == 7.0  # rint(1 / (1e4 / 65535.5)) = rint(6.55)
+    assert info["weights_coarsened_for_threshold"] and not info["exact"]
+    assert net.populations[1].params.v_th <= load_profile("loihi").threshold_max
+    assert net.projections[0].weights[0, 0] == 126.0  # rint(0.3 / (2e4 / 8388543.5))
+
+
+def test_whole_weights_and_thresholds_stay_exact_on_loihi():
+    # weight 1, v_th = 1e4: the old 17-bit integer limit coarsened this to weight 7; Loihi's
+    # threshold is a 17-bit mantissa << 6 in a 24-bit state, so it is stored as it is
+    net, rec = quantize(small(np.array([[1.0]]), v_th=1e4), load_profile("loihi"))
+    assert rec.populations["y"]["exact"] and rec.projections["w"]["max_abs_error"] == 0
+    assert net.projections[0].weights[0, 0] == 1.0 and net.populations[1].params.v_th == 1e4
 
 
 def test_threshold_that_leaves_no_weight_names_the_node():
-    with pytest.raises(BudgetError, match=r"node 'n' \(motif m.*17 threshold bits of loihi.*"
+    with pytest.raises(BudgetError, match=r"node 'n' \(motif m.*loihi's threshold range.*"
                        r"rounds to zero"):
-        quantize(small(np.array([[1.0]]), v_th=1e6), load_profile("loihi"))
+        quantize(small(np.array([[0.3]]), v_th=1e9), load_profile("loihi"))
 
 
 def test_long_delay_error_mode():
@@ -112,9 +121,41 @@ def test_relay_for_stencil_taps():
 def test_quantized_cfar_runs_in_integer_arithmetic_with_the_same_spikes():
     net = os_cfar_network(16, 32, k=40)
     q, rec = quantize(net, load_profile("loihi"))
-    # kernel peak 40.5 -> 127: training weight -1 -> round(-3.136) = -3, CUT 127
-    assert sorted(np.unique(q.projections[0].kernel).tolist()) == [-3.0, 0.0, 127.0]
+    # one kernel: training -1, CUT k = 40, threshold 1 — whole numbers, stored as they are
+    # (the old single 8-bit scale of a k + 1/2 kernel made them -3 and 127: rank 42, not 40)
+    assert sorted(np.unique(q.projections[0].kernel).tolist()) == [-1.0, 0.0, 40.0]
+    assert rec.populations["det"]["exact"] and rec.populations["det"]["scale"] == 1.0
     x = np.random.default_rng(0).random((2, 16, 32))
+    ref = simulate(net, {"det_in": x})
     f = simulate(q, {"det_in": x}, arithmetic="float64")
     i = simulate(q, {"det_in": x}, arithmetic="int64")
     np.testing.assert_array_equal(f.first_spike_steps["det"], i.first_spike_steps["det"])
+    np.testing.assert_array_equal(ref.outputs["det"], i.outputs["det"])
+
+
+def test_a_half_margin_cut_weight_stays_exact_in_half_units():
+    # k + 1/2 with training -1 and threshold 1: whole in units of 1/2 (-2, 81, 2)
+    net = small(np.array([-1.0, 40.5, -1.0]), v_th=1.0, stencil=True)
+    q, rec = quantize(net, load_profile("loihi"))
+    assert q.projections[0].kernel.tolist() == [-2.0, 81.0, -2.0]
+    assert rec.populations["y"]["scale"] == 0.5 and q.populations[1].params.v_th == 2.0
+
+
+def test_whole_weights_beyond_one_exponent_are_split_exactly():
+    # one exponent per projection: 2, 4, ..., 78 and 255 need exponent 1 (255 > 127); 255 =
+    # 127·2 + 1 leaves a residual 1 at exponent 0 — one extra stored weight of 40 (2.5 %)
+    w = np.concatenate([2.0 * np.arange(1, 40), [255.0]])[:, None]
+    net = small(w, v_th=2.0)
+    prof = HardwareProfile(name="c", weight_bits=8, weight_exponent_max=7, threshold_bits=24)
+    q, rec = quantize(net, prof)
+    r = rec.projections["w"]
+    assert r["exact"] and r["max_abs_error"] == 0 and r["extra_weights"] == 1
+    assert [t["exponent"] for t in r["terms"]] == [1, 0]
+    assert sum(p.weights for p in q.projections).tolist() == w.tolist()
+    assert [p.id for p in q.projections] == ["w", "w__x1"]
+    x = np.random.default_rng(1).random((3, 40))
+    a, b = simulate(net, {"x": x}), simulate(q, {"x": x}, arithmetic="int64")
+    np.testing.assert_array_equal(a.first_spike_steps["y"], b.first_spike_steps["y"])
+    # many odd whole weights (levels made for another width) are rounded, not split
+    q2, rec2 = quantize(small(np.array([[255.0, 197.0], [-1.0, 3.0]]), v_th=2.0), prof)
+    assert not rec2.populations["y"]["exact"] and len(q2.projections) == 1

@@ -13,8 +13,11 @@ def test_carrada_spiking_demo_finds_the_targets_and_writes_figures(tmp_path):
     scene = report.scenes[0]
     assert scene.target == "loihi2"
     assert scene.spiking_n_found == scene.n_targets == 4
-    assert scene.spiking_n_false <= 1
-    assert scene.cell_precision >= 0.95 and scene.cell_sensitivity >= 0.6
+    # measured: 2 false objects, both in the Tx->Rx leakage's range rows 0-1 (their noise is
+    # ~110 dB under the leakage in the same neuron, below one step of T = 256), sensitivity
+    # 0.99 and precision 0.99 (before per-neuron gains and calibrated rounding: 0.67 / 1.00)
+    assert scene.spiking_n_false <= 2
+    assert scene.cell_precision >= 0.97 and scene.cell_sensitivity >= 0.97
     assert scene.sft_rmse < 0.01
     assert scene.resources["cores"] > 0 and scene.resources["neurons"] > 0
     names = sorted(p.name for p in tmp_path.iterdir())

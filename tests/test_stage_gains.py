@@ -190,8 +190,16 @@ def test_option_none_narrow_weights_and_bad_value() -> None:
     cal = strong_and_weak(1)
     g = rd_graph()
     assert "stage_gains" not in compile_rd(g, cal, stage_gains="none").networks[0].meta
-    # 8-bit weights leave no room: the weakest-gain column would keep < log2(T)+2 bits
-    assert compile_rd(g, cal, weight_bits=8).networks[0].decoders[0].gain_axis is None
+    # 8-bit weights leave no room for gained columns (the weakest-gain column would keep
+    # < log2(T)+2 bits) ...
+    weights = compile_rd(g, cal, weight_bits=8, stage_gains="weights").networks[0]
+    assert weights.decoders[0].gain_axis is None
+    # ... so 'auto' gives the gains per neuron: thresholds and biases, the weights untouched
+    neurons = compile_rd(g, cal, weight_bits=8).networks[0]
+    assert neurons.meta["stage_gains"]["rng"]["mechanism"] == "neurons"
+    rng = next(p for p in neurons.populations if p.id == "rng/out")
+    assert rng.params.scale_axis == "range" and max(rng.params.scales) > 1
+    assert neurons.decoders[0].gain_axis == "range"
     with pytest.raises(CompileError, match="stage_gains='always' is not a mode"):
         compile_rd(g, cal, stage_gains="always")
 

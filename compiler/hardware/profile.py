@@ -56,8 +56,23 @@ class HardwareProfile(BaseModel):
     bits_per_synapse : int
         Bits of one stored synapse entry (weight + delay + index).
     weight_bits, threshold_bits : int or None
-        Signed integer width of weights and of thresholds/biases/membranes
-        (``None``: floating point, no quantization).
+        Signed integer width of a weight mantissa and of thresholds/biases/membranes
+        in state units (``None``: floating point, no quantization).
+    weight_exponent_max : int
+        Weights are ``mantissa·2^e`` with one exponent ``e ∈ [0, weight_exponent_max]``
+        per projection (a synapse format); 0: plain integers.
+    threshold_mantissa_bits, threshold_shift : int or None, int
+        Thresholds are an unsigned mantissa of that width times ``2^threshold_shift``
+        (``None``: any integer up to the ``threshold_bits`` limit).
+    bias_mantissa_bits, bias_exponent_max : int or None, int
+        Biases are a signed mantissa of that width times ``2^e``, ``0 ≤ e ≤ max``.
+    state_bits : int or None
+        Signed width of the neuron state ``u``, ``v`` (documented; not simulated).
+    graded_spike_bits : int or None
+        Payload width of graded spikes (``None``: binary spikes only).
+    per_neuron_scales : bool
+        Whether each neuron may have its own bias and threshold (or initial membrane),
+        which the per-neuron gains of the time-coded motifs need.
     delay_bits : int or None
         Width of a synaptic delay; the largest delay is ``2**delay_bits - 1`` steps.
     max_steps_per_frame : int or None
@@ -83,6 +98,14 @@ class HardwareProfile(BaseModel):
     bits_per_synapse: int = Field(default=64, ge=1)
     weight_bits: _Count = Field(default=None, ge=2, le=64)
     threshold_bits: _Count = Field(default=None, ge=2, le=64)
+    weight_exponent_max: int = Field(default=0, ge=0, le=32)
+    threshold_mantissa_bits: _Count = Field(default=None, ge=1, le=64)
+    threshold_shift: int = Field(default=0, ge=0, le=32)
+    bias_mantissa_bits: _Count = Field(default=None, ge=2, le=64)
+    bias_exponent_max: int = Field(default=0, ge=0, le=32)
+    state_bits: _Count = Field(default=None, ge=2, le=64)
+    graded_spike_bits: _Count = Field(default=None, ge=1, le=64)
+    per_neuron_scales: bool = False
     delay_bits: _Count = Field(default=None, ge=0, le=32)
     max_steps_per_frame: _Count = Field(default=None, ge=1)
     time_step_s: float | None = Field(default=None, gt=0)
@@ -100,6 +123,22 @@ class HardwareProfile(BaseModel):
     def max_delay_steps(self) -> int | None:
         """Largest synaptic delay, ``2**delay_bits - 1`` steps (``None``: unbounded)."""
         return None if self.delay_bits is None else (1 << self.delay_bits) - 1
+
+    @property
+    def threshold_max(self) -> int | None:
+        """Largest threshold in state units (``None``: unbounded).
+
+        Examples
+        --------
+        >>> load_profile("loihi").threshold_max  # (2**17 - 1) << 6
+        8388544
+        """
+        limits = []
+        if self.threshold_bits is not None:
+            limits.append((1 << (self.threshold_bits - 1)) - 1)
+        if self.threshold_mantissa_bits is not None:
+            limits.append(((1 << self.threshold_mantissa_bits) - 1) << self.threshold_shift)
+        return min(limits) if limits else None
 
     def limits(self) -> np.ndarray:
         """Per-core limits in :data:`BUDGETS` order as floats (``inf`` = unbounded).

@@ -32,11 +32,16 @@ _CODE = LatencyCode(t_max=100, x_min=0.0, x_max=1.0)
 
 
 def os_cfar_kernel(guard: int = 3, train: int = 4, k: int = 132) -> np.ndarray:
-    """A square OS-CFAR window: −1 on training cells, ``k + 0.5`` on the CUT, 0 on guard cells."""
+    """A square OS-CFAR window: −1 on training cells, ``k`` on the CUT, 0 on guard cells.
+
+    With whole weights and threshold 1 the membrane ``k − B`` is a whole number, so the
+    neuron fires iff ``B ≤ k − 1`` exactly (no half margin needed) and an 8-bit target
+    stores ``k`` as ``mantissa·2^e`` without rounding (132 = 33·2²).
+    """
     w = 2 * (guard + train) + 1
     kern = -np.ones((w, w))
     kern[train:w - train, train:w - train] = 0.0
-    kern[w // 2, w // 2] = k + 0.5
+    kern[w // 2, w // 2] = float(k)
     return kern
 
 

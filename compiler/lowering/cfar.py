@@ -13,7 +13,8 @@ projections:
 
 OS-CFAR (``kind: os``)
     IF neuron (``du = 1``, ``dv = 0``, fire-once, ``v_th = 1``, always listening);
-    training weight ``−1``; CUT weight ``k_eff + 1/2`` with delay ``D``; log latency
+    training weight ``−1``; CUT weight ``k_eff + 1/2`` (``k_eff`` on a target with integer
+    weights, where no float tie exists) with delay ``D``; log latency
     code in which ``α`` is the delay ``D``.  Fires when the CUT spike arrives iff
     fewer than ``k_eff`` training spikes came no later.
 CA-CFAR (``kind: ca``)
@@ -146,7 +147,10 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
         code, cut_delay, train_delay, info = os_log_code(
             lo, hi, alpha=alpha, n_steps=n_steps, ties=ctx.option("cfar_ties", "balanced"))
         params = NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="fire_once")
-        cut_w = effective_k(op.k, n_avail, win.n_train) + 0.5
+        # integer targets: the membrane k_eff − B is a whole number, so k_eff itself decides
+        # exactly (B <= k_eff − 1) and the quantize pass can store it without rounding
+        integer = getattr(ctx.target, "weight_bits", None) is not None
+        cut_w = effective_k(op.k, n_avail, win.n_train) + (0.0 if integer else 0.5)
         train_w = -1.0
     else:
         code, cut_delay = ca_linear_code(lo, hi, alpha=alpha, n_steps=n_steps)

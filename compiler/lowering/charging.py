@@ -47,6 +47,7 @@ __all__ = [
     "companding_schedule",
     "choose_schedule",
     "dyadic_ceil",
+    "bias_ceil",
     "COMPANDING_RATIOS",
 ]
 
@@ -143,20 +144,45 @@ def _check(n_steps: int, v_full: float) -> None:
                            f"n_steps={n_steps}, full scale {v_full}")
 
 
-def constant_schedule(n_steps: int, v_full: float) -> ChargingSchedule:
-    """The paper's constant bias ``b = dyadic_ceil(v_full / n)`` (top level ``b·n ≥ v_full``).
+def bias_ceil(x: float, whole: bool | int = False) -> float:
+    """A charging bias ``≥ x``: :func:`dyadic_ceil`, or with ``whole`` the next even whole
+    number (≥ 2), so the threshold ``B(n) + b_n/2`` of an integer target is whole too; an
+    integer ``whole`` is the target's bias mantissa width: the bias is also ``m·2^e`` with
+    ``|m| < 2^{whole−1}`` (as the chip stores it, so the quantize pass keeps it).
 
     Examples
     --------
-    >>> constant_schedule(256, v_full=1000.0).biases
-    (3.90625,)
+    >>> bias_ceil(3.3), bias_ceil(3.3, whole=True), bias_ceil(0.2, whole=True)
+    (3.30078125, 4.0, 2.0)
+    >>> bias_ceil(84779.0, whole=13)  # 13-bit mantissa: 2650·2^5
+    84800.0
+    """
+    if whole is False:
+        return dyadic_ceil(x)
+    if not (math.isfinite(x) and x > 0):
+        raise CompileError(f"a charging bias must be a positive finite number, got {x}")
+    b = float(max(2, 2 * math.ceil(x / 2)))
+    if whole is True or whole < 3:
+        return b
+    return max(b, dyadic_ceil(b, bits=int(whole) - 1))
+
+
+def constant_schedule(n_steps: int, v_full: float, whole: bool | int = False
+                      ) -> ChargingSchedule:
+    """The paper's constant bias ``b = dyadic_ceil(v_full / n)`` (top level ``b·n ≥ v_full``);
+    ``whole``: the next even whole number (:func:`bias_ceil`).
+
+    Examples
+    --------
+    >>> constant_schedule(256, v_full=1000.0).biases, constant_schedule(256, 1000.0, True).biases
+    ((3.90625,), (4.0,))
     """
     _check(n_steps, v_full)
-    return ChargingSchedule(n_steps, (0,), (dyadic_ceil(v_full / n_steps),))
+    return ChargingSchedule(n_steps, (0,), (bias_ceil(v_full / n_steps, whole),))
 
 
 def companding_schedule(n_steps: int, v_full: float, ratio: float,
-                        n_phases: int = 4) -> ChargingSchedule:
+                        n_phases: int = 4, whole: bool | int = False) -> ChargingSchedule:
     r"""``n_phases`` equal phases with biases ``b_0·ratio^i`` and top level ``≥ v_full``.
 
     Examples
@@ -173,11 +199,11 @@ def companding_schedule(n_steps: int, v_full: float, ratio: float,
     lengths = np.diff([*starts, n_steps])
     weights = ratio ** np.arange(n_phases)
     b0 = v_full / float(np.dot(lengths, weights))
-    return ChargingSchedule(n_steps, starts, tuple(dyadic_ceil(b0 * w) for w in weights))
+    return ChargingSchedule(n_steps, starts, tuple(bias_ceil(b0 * w, whole) for w in weights))
 
 
 def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
-                    mode: str = "auto", min_gain: float = 0.02
+                    mode: str = "auto", min_gain: float = 0.02, whole: bool | int = False
                     ) -> tuple[ChargingSchedule, dict[str, float]]:
     """Pick the charging schedule with the lowest MSE on calibration membrane values.
 
@@ -195,6 +221,9 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
         companding candidate.
     min_gain : float
         Relative improvement required in ``auto``.
+    whole : bool or int
+        Even whole-number biases (an integer target: no rounding in the quantize pass);
+        an int: also representable with that bias mantissa width (:func:`bias_ceil`).
 
     Returns
     -------
@@ -215,10 +244,10 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
     if mode not in ("auto", "constant", "companding"):
         raise CompileError(f"charging={mode!r} is not a schedule; use 'auto', 'constant' or "
                            "'companding'")
-    candidates = {"constant": constant_schedule(n_steps, v_full)}
+    candidates = {"constant": constant_schedule(n_steps, v_full, whole)}
     if mode != "constant" and samples is not None and n_steps >= 4:
         for r in COMPANDING_RATIOS:
-            candidates[f"companding-{r}"] = companding_schedule(n_steps, v_full, r)
+            candidates[f"companding-{r}"] = companding_schedule(n_steps, v_full, r, whole=whole)
     if samples is None:
         return candidates["constant"], {}
     errors = {name: s.mse(samples) for name, s in candidates.items()}

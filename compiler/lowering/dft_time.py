@@ -55,9 +55,15 @@ from compiler.lowering.charging import choose_schedule
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
 from compiler.lowering.registry import HOST, LoweringRegistry
-from compiler.lowering.stage_gains import exact_weight_bits, gained_range, stage_gains
+from compiler.lowering.stage_gains import (
+    exact_weight_bits,
+    gain_mechanism,
+    gained_range,
+    pow2_gains,
+    stage_gains,
+)
 from compiler.lowering.values import SpikeValue, Value
-from compiler.quantize_weights import quantize, weight_bits_of
+from compiler.quantize_weights import rint_feedback, rint_keep_sums, weight_bits_of
 from compiler.snn import (
     N_PARTS,
     PART_AXIS,
@@ -73,6 +79,7 @@ from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
 
 __all__ = ["DEFAULT_TIME_STEPS", "TimeCode", "LayerInput", "calibration_of", "headroom_of",
+           "integer_target", "layer_weight_bits",
            "time_source", "time_layer", "lower_time_linear", "register_time"]
 
 #: Charging (and encoding) window ``T`` when the ``time_steps`` option is not given.
@@ -117,6 +124,7 @@ class LayerInput:
     matrix: np.ndarray
     contract: tuple[str, ...]
     produce: tuple[str, ...]
+    second_moment: np.ndarray | None = None  # E[v vᵀ] of the rows' inputs (weight rounding)
 
 
 def _steps(ctx: LoweringContext) -> int:
@@ -184,7 +192,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
                shape: dict[str, int], split: Split, full_scale: float,
                samples: tuple[float, ...] = (), motif: str = "time",
                gain_axis: str | None = None, gains: tuple[float, ...] = (),
-               weight_bits: int | None = None) -> SpikeValue:
+               weight_bits: int | None = None, neuron_gains: bool = False) -> SpikeValue:
     """Add one two-stage ramp layer reading ``inputs`` (all in ``code_in``); see the module doc.
 
     Parameters
@@ -208,7 +216,12 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         Per-index gains the output carries (already in the matrices, the full
         scale and the samples); its decoder divides them out.
     weight_bits : int, optional
-        Width to quantize to (default: option ``weight_bits`` or 24).
+        Width to quantize to (default: option ``weight_bits``, else the target's, else 24).
+    neuron_gains : bool
+        The ``gains`` are per-neuron scales of the charging stage, not in the matrices:
+        ``full_scale`` and ``samples`` are those of the *most* gained index (the level
+        over ``max g``) and index ``r`` gets the threshold/bias scale ``c_r = max g / g_r``,
+        so its spikes carry ``g_r`` times its value like a gained column would.
 
     Returns
     -------
@@ -216,20 +229,42 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         Time-linear code for the constant schedule, ``time-table`` for companding.
     """
     t = _steps(ctx)
-    bits = weight_bits or weight_bits_of(ctx.option("weight_bits"), node=node)
-    levels, q = quantize(np.concatenate([i.matrix.ravel() for i in inputs]), bits)
-    unit = q * code_in.scale
+    bits = weight_bits or layer_weight_bits(ctx, node)
+    stacked = np.concatenate([i.matrix.ravel() for i in inputs])
+    whole = integer_target(ctx) and (getattr(ctx.target, "bias_mantissa_bits", None) or True)
+    top = float(max(gains)) if neuron_gains else 1.0
     mode = ctx.option("charging", "auto")
     if mode != "constant" and not _allow_companding(ctx, node):
         mode = "constant"
-    sched, errors = choose_schedule(t, (full_scale or 1.0) / unit,
-                                    np.asarray(samples) / unit if samples else None, mode=mode)
+    peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
+    top_level = 2 ** (bits - 1) - 1
+    for _ in range(8):  # fewer weight levels until threshold and biases fit the target
+        q = peak / top_level
+        levels, rounding = np.rint(stacked / q), ["nearest"] * len(inputs)
+        if whole:  # integer weights: keep the rounding error off the strong static inputs
+            levels, rounding = _round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
+                                             top_level)
+        unit = q * code_in.scale
+        sched, errors = choose_schedule(t, (full_scale or 1.0) / unit,
+                                        np.asarray(samples) / unit if samples else None,
+                                        mode=mode, whole=whole)
+        excess = _excess(ctx, sched, top)
+        if excess <= 1.0 or top_level == 1:
+            break
+        top_level = max(1, math.floor(top_level / (excess * 1.01)))
+    bits = max(2, math.ceil(math.log2(top_level + 1)) + 1)
     e_in, e_out = code_in.end, code_in.end + t
     phases = (Phase(start_step=0, spiking_on=False),
               *(Phase(start_step=e_in + s, bias=b, input_on=False)
                 for s, b in zip(sched.starts, sched.biases, strict=True)),
               Phase(start_step=e_out, input_on=False, spiking_on=False))
-    params = NeuronParams(du=0.0, dv=0.0, v_th=sched.v_th, reset="fire_once", phases=phases)
+    scales = {}
+    g_top = 1.0
+    if neuron_gains and max(gains) > 1:
+        g_top = float(max(gains))
+        scales = {"scale_axis": gain_axis, "scales": tuple(g_top / g for g in gains)}
+    params = NeuronParams(du=0.0, dv=0.0, v_th=sched.v_th, reset="fire_once", phases=phases,
+                          **scales)
     builder = ctx.builder()
     pop: Population = builder.population(node, "out", shape, params, motif=motif)
     offset = 0
@@ -238,20 +273,87 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         offset += inp.matrix.size
         builder.matrix(node, f"w{i}", inp.source, pop.id, contract=inp.contract,
                        produce=inp.produce, motif=motif, weights=w)
-    charging = {**sched.describe(), "mse": errors, "weight_bits": bits, "unit": unit}
+    charging = {**sched.describe(), "mse": errors, "weight_bits": bits, "unit": unit,
+                "rounding": rounding,
+                **({"neuron_gains": {"axis": gain_axis, "max_scale": g_top}} if scales else {})}
     builder.meta.setdefault("charging", {})[node] = charging
     gained = {"gain_axis": gain_axis, "gains": tuple(gains)} if gain_axis else {}
     if sched.kind == "constant":
         b = sched.biases[0]
-        dec = Decoder(port=node, population=pop.id, kind="spike_time", scale=unit * b,
+        dec = Decoder(port=node, population=pop.id, kind="spike_time", scale=unit * b * g_top,
                       t_ref=float(e_out), missing=0.0, combine=split, node=node, **gained)
-        code = TimeCode(end=e_out, scale=unit * b, split=split, **gained).as_code()
+        code = TimeCode(end=e_out, scale=unit * b * g_top, split=split, **gained).as_code()
     else:
-        dec = Decoder(port=node, population=pop.id, kind="spike_table", scale=unit,
+        dec = Decoder(port=node, population=pop.id, kind="spike_table", scale=unit * g_top,
                       table=tuple(float(v) for v in sched.levels()), t_ref=float(e_in),
                       missing=0.0, combine=split, node=node, **gained)
         code = {"kind": "time-table", "end": e_out, "split": split}
     return ctx.spike_value(node, pop, dec, (e_in, e_out), **code, charging=charging)
+
+
+def integer_target(ctx: LoweringContext) -> bool:
+    """Whether the program is quantized for a target with integer weights afterwards (then
+    biases are whole and rounding keeps each column's response to a constant input)."""
+    return getattr(ctx.target, "weight_bits", None) is not None
+
+
+def layer_weight_bits(ctx: LoweringContext, node: str) -> int:
+    """Weight width of a time layer: option ``weight_bits``, else the target's, else exact.
+
+    Lowering at the target's width keeps the quantize pass from re-scaling the layer
+    (its thresholds and biases stay the whole numbers the schedule chose).
+    """
+    option = ctx.option("weight_bits")
+    if option is None:
+        option = getattr(ctx.target, "weight_bits", None)
+    return weight_bits_of(option, node=node)
+
+
+def _excess(ctx: LoweringContext, sched, top: float) -> float:
+    """How far the schedule's threshold and largest bias (times the largest per-neuron
+    scale ``top``) exceed the target's ranges (≤ 1: they fit)."""
+    target = ctx.target
+    out = 1.0
+    limit = getattr(target, "threshold_max", None)
+    if limit:
+        out = max(out, sched.v_th * top / limit)
+    b_bits = getattr(target, "bias_mantissa_bits", None)
+    if b_bits:
+        b_max = ((1 << (b_bits - 1)) - 1) << target.bias_exponent_max
+        out = max(out, max(sched.biases) * top / b_max)
+    return out
+
+
+def _round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
+                  ) -> tuple[np.ndarray, list[str]]:
+    """Levels of every input matrix for an integer target, and the rule used per input.
+
+    With the calibrated second moment of the input (``feedback``,
+    :func:`~compiler.quantize_weights.rint_feedback`) the rounding error is kept off the
+    strong inputs that repeat in the calibration data; otherwise (``keep_sums``,
+    :func:`~compiler.quantize_weights.rint_keep_sums`) each column's response to a
+    constant input — static returns over chirps or samples — stays exact.
+    """
+    out, rules = [], []
+    for inp in inputs:
+        m = inp.matrix / q
+        h = inp.second_moment
+        if h is not None and h.shape == (m.shape[0], m.shape[0]):
+            out.append(rint_feedback(m, h, w_max).ravel())
+            rules.append("feedback")
+        else:
+            grouped = m.reshape(-1, parts, m.shape[-1])
+            out.append(np.clip(rint_keep_sums(grouped, axis=0), -w_max, w_max).ravel())
+            rules.append("keep_sums")
+    return np.concatenate(out), rules
+
+
+def _host_moment(ctx: LoweringContext, value: Value, axis: str) -> np.ndarray | None:
+    """The calibrated second moment of a host-encoded input along ``axis`` (None: none)."""
+    if isinstance(value, SpikeValue) and value.network == ctx.network_index:
+        return None  # read as spikes: its code carries gains the moment does not know
+    rec = ctx.calibration.get(value.node)
+    return None if rec is None else getattr(rec, "second_moments", {}).get(axis)
 
 
 def _out_split(complex_out: bool) -> Split:
@@ -274,28 +376,43 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
                            "stage_gains='none'", node=node)
     n_rows = axes.n_in * max(1, N_PARTS[code_in.split])
     start = None
+    neurons = gain_mechanism(ctx) == "neurons"
     if gain_axis is None:
-        cols = np.linalg.norm(real_weights(w, code_in.split, split), axis=0)
+        m0 = real_weights(w, code_in.split, split)
+        cols = np.linalg.norm(m0, axis=0)
         noise = code_in.scale / math.sqrt(12) * cols.reshape(axes.n_out, -1).max(axis=1)
+        peak = float(np.abs(m0).max(initial=0.0))
+        unit = (peak / (2 ** (layer_weight_bits(ctx, node) - 1) - 1) * code_in.scale
+                if neurons and peak > 0 else None)
         start = stage_gains(ctx, node, axes.out_axis, n_rows, t_steps=_steps(ctx),
-                            stage_rule=lower_time_linear, code_noise=noise)
+                            stage_rule=lower_time_linear, code_noise=noise, neuron_unit=unit)
     rec = calibration_of(ctx, node, node)
     full, samples = gained_range(rec, gain_axis, gains, headroom_of(ctx))
     if start is not None:
         g, level = start
-        w, gain_axis, gains, scaled = w * g[:, None], axes.out_axis, tuple(g), True
+        if neurons:  # per-neuron threshold/bias scales: powers of two, weights untouched
+            g = pow2_gains(g)
+        else:
+            w, scaled = w * g[:, None], True
+        gain_axis, gains = axes.out_axis, tuple(g)
         full, samples = gained_range(rec, gain_axis, gains, headroom_of(ctx))
         full = level * headroom_of(ctx)  # every index's level ℓ_r reaches the top
         ctx.builder().meta.setdefault("stage_gains", {})[node] = {
-            "axis": gain_axis, "n": len(gains), "max_gain": float(g.max())}
+            "axis": gain_axis, "n": len(gains), "max_gain": float(g.max()),
+            "mechanism": "neurons" if neurons else "weights"}
+        if neurons:
+            top = float(g.max())
+            full, samples = full / top, tuple(x / top for x in samples)
     m = real_weights(w, code_in.split, split)
     bits = None
     if scaled and ctx.option("weight_bits") is None:
         bits = exact_weight_bits(_steps(ctx), n_rows)
-    layer_in = LayerInput(source, m, axes.contract(code_in.split), axes.produce(split))
+    layer_in = LayerInput(source, m, axes.contract(code_in.split), axes.produce(split),
+                          _host_moment(ctx, x, axes.axis))
     return time_layer(ctx, node, code_in, [layer_in], shape=axes.out_shape(out_type, split),
                       split=split, full_scale=full, samples=samples, gain_axis=gain_axis,
-                      gains=gains, weight_bits=bits)
+                      gains=gains, weight_bits=bits,
+                      neuron_gains=neurons and start is not None)
 
 
 def register_time(registry: LoweringRegistry) -> None:

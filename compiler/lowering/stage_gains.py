@@ -60,11 +60,17 @@ from compiler.lowering.context import LoweringContext
 from compiler.lowering.registry import HOST, LoweringRule
 from ir.errors import CompileError
 
-__all__ = ["STAGE_GAINS", "GAIN_MARGIN", "GAIN_FLOOR", "GAIN_CODE_SIGMAS",
-           "exact_weight_bits", "index_levels", "stage_gains", "gained_range"]
+__all__ = ["STAGE_GAINS", "GAIN_MARGIN", "GAIN_FLOOR", "GAIN_CODE_SIGMAS", "NEURON_MIN_BIAS",
+           "exact_weight_bits", "gain_mechanism", "pow2_gains", "index_levels", "stage_gains",
+           "gained_range"]
 
-#: Values of the ``stage_gains`` option (the first is the default).
-STAGE_GAINS = ("auto", "none")
+#: Values of the ``stage_gains`` option (the first is the default): ``auto`` picks the
+#: mechanism from the target (:func:`gain_mechanism`), ``weights`` scales the weight columns,
+#: ``neurons`` gives each output index its own threshold and bias scale, ``none`` is off.
+STAGE_GAINS = ("auto", "none", "weights", "neurons")
+#: Neuron gains: the smallest charging bias (membrane units) the weakest-gain index keeps,
+#: so ``v_th = b·(T + 1/2)`` stays a whole number and the slope error of a rounded bias small.
+NEURON_MIN_BIAS = 16.0
 #: Stage gains: level of an index over its calibrated maximum (frame-to-frame margin).
 GAIN_MARGIN = 1.25
 #: Stage gains: floor of the per-index levels, in medians of the per-index maxima.
@@ -87,6 +93,39 @@ def exact_weight_bits(t_steps: int, n_rows: int) -> int:
     return min(32, 54 - math.ceil(math.log2(t_steps)) - math.ceil(math.log2(max(n_rows, 2))))
 
 
+def gain_mechanism(ctx: LoweringContext) -> str | None:
+    r"""How stage gains are applied: ``"weights"``, ``"neurons"`` or None (off).
+
+    ``auto`` gives *neuron* gains on a target with integer weights (its ``weight_bits``
+    or the ``weight_bits`` option): the weights keep one scale and each output index
+    ``r`` gets the per-neuron scale ``c_r = g_max / g_r`` of its threshold and charging
+    bias (:attr:`compiler.snn.NeuronParams.scales`).  A neuron with scale ``c`` fires when
+    ``V/c + B(k) ≥ v_th``, so index ``r`` reads its membrane with the resolution
+    ``ℓ_r / T`` of its own level ``ℓ_r`` — what weight gains ``g_r`` give — without
+    weight bits or membrane range spent on the gain (a gained weight column would also
+    multiply the silent stage's intermediate sums by ``g_r``, beyond a 24-bit state).
+    Gains are powers of two (a per-neuron bias exponent and threshold shift on a chip).
+    Without a target width (exact weights) ``auto`` scales the weight columns.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> ctx = SimpleNamespace(option=lambda k, d=None: {"stage_gains": "auto"}.get(k, d),
+    ...                       target=SimpleNamespace(weight_bits=8))
+    >>> gain_mechanism(ctx)
+    'neurons'
+    """
+    mode = ctx.option("stage_gains", STAGE_GAINS[0])
+    if mode == "none":
+        return None
+    if mode in ("weights", "neurons"):
+        return mode
+    integer = ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
+    if not integer:
+        return "weights"
+    return "neurons" if getattr(ctx.target, "per_neuron_scales", True) else "weights"
+
+
 def _gain_path(ctx: LoweringContext, node: str, axis: str,
                stage_rule: LoweringRule) -> list[str] | None:
     """``node`` and the time-coded linear stages along other axes after it, up to the host."""
@@ -106,8 +145,8 @@ def _gain_path(ctx: LoweringContext, node: str, axis: str,
 
 
 def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_steps: int,
-                stage_rule: LoweringRule,
-                code_noise: np.ndarray | None = None) -> tuple[np.ndarray, float] | None:
+                stage_rule: LoweringRule, code_noise: np.ndarray | None = None,
+                neuron_unit: float | None = None) -> tuple[np.ndarray, float] | None:
     """The per-index gains along ``axis`` that stage ``node`` starts, or None.
 
     See the module docstring for the rule and the formula.
@@ -130,6 +169,9 @@ def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_st
         Per index, the rms error the input code's rounding leaves on the stage's
         output (``s_in/√12 · ‖M_col‖₂``, largest part); the levels are at least
         :data:`GAIN_CODE_SIGMAS` times it, since calibration (in floats) does not see it.
+    neuron_unit : float, optional
+        With neuron gains: the layer's membrane unit (value units); the largest gain
+        keeps the weakest index's charging bias at :data:`NEURON_MIN_BIAS` units or more.
 
     Returns
     -------
@@ -150,16 +192,12 @@ def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_st
     """
     mode = ctx.option("stage_gains", STAGE_GAINS[0])
     if mode not in STAGE_GAINS:
-        raise CompileError(f"node {node!r}: stage_gains={mode!r} is not a mode; use 'auto' or "
-                           "'none'", node=node)
-    path = _gain_path(ctx, node, axis, stage_rule) if mode == "auto" else None
+        raise CompileError(f"node {node!r}: stage_gains={mode!r} is not a mode; use one of "
+                           f"{', '.join(STAGE_GAINS)}", node=node)
+    mechanism = gain_mechanism(ctx)
+    path = _gain_path(ctx, node, axis, stage_rule) if mechanism else None
     records = [ctx.calibration.get(n) for n in path or ()]
     if not path or any(r is None or axis not in r.axis_max for r in records):
-        return None
-    bits = (ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
-            or exact_weight_bits(t_steps, n_rows))
-    ratio = 2.0 ** (bits - 1 - (math.ceil(math.log2(t_steps)) + 2))
-    if ratio < 2:
         return None
     maxima = np.asarray(records[0].axis_max[axis])
     levels = index_levels(maxima)
@@ -167,8 +205,29 @@ def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_st
         levels = np.maximum(levels, GAIN_CODE_SIGMAS * np.asarray(code_noise))
     if maxima.max() > 0:  # never coarser than one full scale for all (no gains)
         levels = np.minimum(levels, maxima.max())
+    if mechanism == "neurons":
+        if neuron_unit is None:
+            return None
+        ratio = levels.max() / (neuron_unit * t_steps * NEURON_MIN_BIAS)
+    else:
+        bits = (ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
+                or exact_weight_bits(t_steps, n_rows))
+        ratio = 2.0 ** (bits - 1 - (math.ceil(math.log2(t_steps)) + 2))
+    if ratio < 2:
+        return None
     levels = np.maximum(levels, levels.max() / ratio)
     return levels.max() / levels, float(levels.max())
+
+
+def pow2_gains(gains: np.ndarray) -> np.ndarray:
+    """Gains rounded down to powers of two (so no index is gained above the top level).
+
+    Examples
+    --------
+    >>> pow2_gains(np.array([1.0, 3.9, 4.0, 1000.0])).tolist()
+    [1.0, 2.0, 4.0, 512.0]
+    """
+    return np.exp2(np.floor(np.log2(np.maximum(np.asarray(gains, np.float64), 1.0))))
 
 
 def index_levels(maxima: np.ndarray) -> np.ndarray:

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 
-from compiler.calibration import Calibration, NodeCalibration, measure
+from compiler.calibration import Calibration, NodeCalibration, measure, second_moment
 from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
@@ -122,6 +122,22 @@ def _propagate(graph: Graph, bounds: dict[str, float]) -> dict[str, NodeCalibrat
                                source="bounds") for n, b in out.items()}
 
 
+def _add_second_moments(graph: Graph, types: dict, per_node: dict, nodes: dict) -> None:
+    """The second moments a linear consumer's weight rounding needs (integer targets)."""
+    for node in graph.topological_order():
+        op = graph.op(node)
+        if not isinstance(op, Window | DFT | Linear) or not graph.inputs_of(node):
+            continue
+        src = graph.inputs_of(node)[0]
+        if src not in per_node or src not in nodes or op.axis in nodes[src].second_moments:
+            continue
+        t = types[src]
+        h = second_moment(np.stack(per_node[src]), 1 + t.index(op.axis),
+                          "re_im_signed" if t.complex else "signed")
+        if h is not None:
+            nodes[src].second_moments[op.axis] = h
+
+
 @dataclass(frozen=True)
 class Calibrate(Pass):
     """Measure (or bound) every node's range under the chosen policy; see the module docstring.
@@ -163,6 +179,8 @@ class Calibrate(Pass):
                         per_node.setdefault(node, []).append(value)
             nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()),
                                 axes=types[n].names) for n, v in per_node.items()}
+            if getattr(ctx.target, "weight_bits", None) is not None:
+                _add_second_moments(graph, types, per_node, nodes)
             source = "inputs"
         else:
             bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"

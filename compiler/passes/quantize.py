@@ -1,25 +1,34 @@
-r"""The ``quantize`` pass: weights, thresholds and delays to the target's integer widths.
+r"""The ``quantize`` pass: weights, thresholds, biases and delays in the target's formats.
 
-Currents into a population add up, so every population ``T`` gets **one** scale
-:math:`s_T` shared by its incoming projections and its own parameters:
+Currents into a population add up, so every population ``T`` has **one** state unit
+:math:`s_T` (its membrane's least significant bit, in the lowering's units) shared by its
+incoming projections and its own parameters.  Each projection ``p`` then stores its
+weights in the profile's format (:mod:`compiler.hardware.formats`): a signed mantissa of
+``weight_bits`` times ``2^{e_p}``, one exponent per projection (a synapse format),
+``0 ≤ e_p ≤ weight_exponent_max``.
 
-.. math:: s_T = \frac{\max_{p \to T} \max |w|}{2^{b_w - 1} - 1}, \qquad
-          w' = \mathrm{round}(w / s_T), \quad v_{th}' = \max(1, \mathrm{round}(v_{th} / s_T)),
+* **Exact networks** — every incoming weight and every parameter of ``T`` a whole number
+  of some unit ``2^{-j}``, ``j ≤ 8`` (the time-coded motifs lower at the target's width
+  with whole biases; the OS-CFAR's ``k + 1/2``): :math:`s_T = 2^{-j}`, nothing is
+  rounded.  A whole weight that needs more mantissa bits than one exponent gives is
+  **split** into terms of their own exponents (extra projections ``<id>__x1`` …, extra
+  stored weights in the record), so it stays exact — unless that adds more than
+  :data:`MAX_SPLIT_SHARE` of the stored weights (levels made for another width: rounded).
+* **Others** — weights already on the one-scale grid ``max|w| / (2^{b_w-1} - 1)`` keep
+  it (levels trained for the width); else :math:`s_T = \min_p \max|w_p| / (2^{b_w-1} - 1)`
+  (the finest projection keeps all its mantissa bits), coarsened until the largest fits
+  ``2^{e_max}`` and until threshold, reset and biases fit:
+  :math:`w' = \mathrm{round}(w / (s_T 2^{e_p}))\,2^{e_p}`,
+  :math:`v_{th}' = \max(1, \mathrm{round}(v_{th} / s_T))`.
 
-biases and ``v_reset`` likewise, decays rounded to multiples of ``1/4096``.  The
-network keeps its meaning in integer units (the simulator's ``int64`` arithmetic
-runs it); the record states, per projection, the largest and mean absolute
-error :math:`|w' s_T - w|` (and relative to :math:`\max|w|`) and how many weights
-rounded to zero, and per population the threshold error.  A threshold, bias or
-reset that would need more than ``threshold_bits`` coarsens the population's scale
-(its weights get fewer levels; ``weights_coarsened_for_threshold`` in the record);
-one that still cannot fit raises :class:`~ir.errors.BudgetError`.
-
-Delays beyond ``D = 2**delay_bits - 1`` steps either raise ``BudgetError``
-(``long_delays="error"``) or go through **relay chains** (``"relay"``): a relay
-population copies the source (one neuron per source neuron, weight 1, threshold
-1, instantaneous current, reset by subtraction, so it re-emits every spike
-exactly ``D`` steps later) and the synapse keeps the remaining ``d - D``.
+Thresholds must fit ``HardwareProfile.threshold_max`` (times the largest per-neuron
+scale) and biases the bias mantissa/exponent; decays are rounded to multiples of
+``1/4096``.  The record states, per projection, the unit, the exponent and terms, the
+largest and mean absolute error (and relative to its own ``max|w|``), the weights rounded
+to zero and the extra synapses of split terms; per population the threshold and bias
+errors.  A threshold that cannot fit raises :class:`~ir.errors.BudgetError` naming the
+node, the value and the limit.  Delays beyond ``2**delay_bits - 1`` steps are relayed or
+refused (:mod:`compiler.passes.relay`).
 
 Examples
 --------
@@ -34,38 +43,33 @@ Examples
 >>> q, rec = quantize(net, load_profile("loihi"))
 >>> q.projection["w"].weights.ravel().tolist(), q.population["y"].params.v_th
 ([127.0, -38.0], 64.0)
->>> round(rec.projections["w"]["max_abs_error"], 5)
-0.00079
+>>> round(rec.projections["w"]["max_abs_error"], 5), rec.projections["w"]["exponent"]
+(0.00079, 0)
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import ClassVar, Literal
+from typing import ClassVar
 
 import numpy as np
 
 from compiler.hardware import HardwareProfile, load_profile
+from compiler.hardware.formats import bias_value, weight_terms
 from compiler.passes.base import CompileContext, Pass
+from compiler.passes.relay import MAX_RELAY_STAGES, LongDelays, relay_long_delays
 from compiler.passes.split import describe
 from compiler.program import CompiledProgram, Segment
-from compiler.snn import (
-    DECAY_ONE,
-    NeuronParams,
-    Population,
-    SpikingNetwork,
-    StencilProjection,
-)
+from compiler.snn import DECAY_ONE, NeuronParams, Population, SpikingNetwork
+from compiler.snn.projections import weights_of, with_weights
 from ir.errors import BudgetError
 
-__all__ = ["Quantize", "QuantizeRecord", "quantize", "relay_long_delays"]
-
-LongDelays = Literal["error", "relay"]
+__all__ = ["MAX_RELAY_STAGES", "Quantize", "QuantizeRecord", "quantize", "relay_long_delays"]
 
 
 @dataclass
 class QuantizeRecord:
-    """Per projection and population: the scale and the rounding errors; the relays added."""
+    """Per projection and population: unit, exponents, terms, rounding errors; relays added."""
 
     profile: str
     projections: dict[str, dict] = field(default_factory=dict)
@@ -77,65 +81,175 @@ class QuantizeRecord:
         return {"profile": self.profile, "projections": self.projections,
                 "populations": self.populations, "relays": self.relays}
 
-
-def _weights(p) -> np.ndarray:
-    if isinstance(p, StencilProjection):
-        return p.kernel
-    return p.weights if p.weights is not None else p.values
-
-
-def _with_weights(p, w: np.ndarray):
-    if isinstance(p, StencilProjection):
-        return replace(p, kernel=w)
-    return replace(p, weights=w) if p.weights is not None else replace(p, values=w)
+    @property
+    def extra_weights(self) -> int:
+        """Stored weights added by split terms (the report counts their synapse instances)."""
+        return sum(int(r.get("extra_weights", 0)) for r in self.projections.values())
 
 
-def _fit(pop: Population, what: str, value: float, limit: int, profile) -> None:
-    if abs(value) > limit:
-        raise BudgetError(
-            f"{describe(pop)}: quantized {what} {value:.0f} needs more than the "
-            f"{profile.threshold_bits} threshold bits of {profile.name} (limit {limit}); "
-            "raise the weights relative to the threshold in the lowering, or use a target "
-            "with wider thresholds", node=pop.origin.get("node", pop.id))
+#: Most extra stored weights (over the unsplit ones) the exact path may add by splitting;
+#: beyond it the weights are rounded instead (they were levels for another width).
+MAX_SPLIT_SHARE = 0.05
+#: Exact units tried: ``2^0 … 2^-EXACT_UNIT_BITS`` (dyadic weights and biases stay exact).
+EXACT_UNIT_BITS = 8
 
 
-def _state_scale(par: NeuronParams, profile) -> float:
-    """The smallest scale at which threshold, reset and biases fit ``threshold_bits``.
-
-    When the weights' own scale is finer than this, the weights are coarsened
-    (fewer effective weight levels) rather than the compilation refused; the
-    record says so and the rounding errors show the cost.
-    """
-    if not profile.threshold_bits:
-        return 0.0
-    limit = (1 << (profile.threshold_bits - 1)) - 1
-    peak = max([abs(par.v_th), abs(par.v_reset), *(abs(ph.bias) for ph in par.phases)])
-    return peak / (limit - 0.5)
+def _whole(x: np.ndarray) -> bool:
+    return bool(np.all(np.asarray(x) == np.rint(x)))
 
 
-def _quantize_params(pop: Population, scale: float, profile) -> tuple[NeuronParams, dict]:
+def _near_whole(x: np.ndarray, tol: float = 1e-4) -> bool:
+    return bool(np.all(np.abs(np.asarray(x) - np.rint(x)) <= tol))
+
+
+def _exact_unit(pop: Population, incoming: list, peak: float,
+                profile: HardwareProfile) -> float | None:
+    """The largest unit ``2^-j`` in which every weight and parameter is a whole number
+    that split terms can hold exactly (None: there is none)."""
     par = pop.params
-    limit = (1 << (profile.threshold_bits - 1)) - 1
-    v_th = max(1.0, float(np.rint(par.v_th / scale)))
-    v_reset = float(np.rint(par.v_reset / scale))
-    for what, v in (("threshold", v_th), ("reset", v_reset)):
-        _fit(pop, what, v, limit, profile)
-    phases = []
+    values = np.array([par.v_th, par.v_reset, *(ph.bias for ph in par.phases)])
+    w_max = (1 << (profile.weight_bits - 1)) - 1
+    reach = w_max * 2.0 ** (profile.weight_exponent_max + 7 * 3)  # four 8-bit terms
+    for j in range(EXACT_UNIT_BITS + 1):
+        unit = 2.0 ** -j
+        if peak / unit > reach:
+            return None
+        if _whole(values / unit) and all(_whole(weights_of(p) / unit) for p in incoming):
+            decays_exact = _whole(np.array([par.du, par.dv]) * DECAY_ONE)
+            return unit if decays_exact else None
+    return None
+
+
+def _split_share(terms: dict[str, list]) -> float:
+    """Stored weights of split terms over the first terms' (0: nothing split)."""
+    first = sum(int(np.count_nonzero(weights_of(t[0]))) for t in terms.values())
+    extra = sum(int(np.count_nonzero(weights_of(q))) for t in terms.values() for q in t[1:])
+    return extra / first if first else 0.0
+
+
+def _state_unit(pop: Population, incoming: list, profile: HardwareProfile,
+                allow_exact: bool = True) -> tuple[float, bool]:
+    """``(s_T, exact)`` for a population (see the module docstring)."""
+    w_max = (1 << (profile.weight_bits - 1)) - 1
+    e_top = 2.0 ** profile.weight_exponent_max
+    peaks = [float(np.abs(weights_of(p)).max(initial=0.0)) for p in incoming]
+    peaks = [x for x in peaks if x > 0]
+    exact = _exact_unit(pop, incoming, max(peaks, default=0.0), profile) if allow_exact else None
+    if exact is not None:
+        return exact, True
+    par = pop.params
+    if peaks:  # weights already on the one-scale grid (levels made for this width): keep it
+        grid = max(peaks) / w_max
+        if all(_near_whole(weights_of(p) / grid) for p in incoming) and grid >= _param_unit(
+                par, profile):
+            return grid, False
+    unit = min(peaks) / w_max if peaks else 1.0
+    unit = max(unit, max(peaks, default=0.0) / (w_max * e_top))
+    return max(unit, _param_unit(par, profile)), False
+
+
+def _param_unit(par: NeuronParams, profile: HardwareProfile) -> float:
+    """The smallest unit at which threshold, reset and biases fit (0: no limit)."""
+    limit = profile.threshold_max
+    if limit is None:
+        return 0.0
+    peak = max([abs(par.v_th), abs(par.v_reset), *(abs(ph.bias) for ph in par.phases)])
+    return peak * max(par.scales, default=1.0) / (limit - 0.5)
+
+
+def _needs_threshold_grid(par: NeuronParams, profile: HardwareProfile) -> bool:
+    """Whether ``v_th`` must be a multiple of ``2^threshold_shift`` in state units.
+
+    A non-leaky neuron (``dv = 0``) that never resets to a value can take any whole
+    threshold ``θ``: a shared grid threshold ``θ' ≥ θ`` and the initial membrane ``θ' − θ``
+    give the same spikes (per-neuron initial state, ``per_neuron_scales``).
+    """
+    if not profile.threshold_shift:
+        return False
+    offset_ok = profile.per_neuron_scales and par.dv == 0.0 and par.reset != "value"
+    return not offset_ok
+
+
+def _fit(pop: Population, what: str, value: float, profile: HardwareProfile) -> None:
+    limit = profile.threshold_max
+    if limit is not None and abs(value) > limit:
+        raise BudgetError(
+            f"{describe(pop)}: quantized {what} {value:.0f} exceeds the {what} range of "
+            f"{profile.name} (limit {limit}: {profile.threshold_bits}-bit state"
+            + (f", {profile.threshold_mantissa_bits}-bit mantissa << {profile.threshold_shift}"
+               if profile.threshold_mantissa_bits else "")
+            + "); raise the weights relative to the threshold in the lowering, use fewer "
+            "time steps, or a target with wider thresholds", node=pop.origin.get("node", pop.id))
+
+
+def _quantize_params(pop: Population, unit: float, profile: HardwareProfile
+                     ) -> tuple[NeuronParams, dict]:
+    par = pop.params
+    if par.scale_axis is not None and not profile.per_neuron_scales:
+        raise BudgetError(
+            f"{describe(pop)}: needs per-neuron threshold/bias scales along "
+            f"{par.scale_axis!r}, which {profile.name} does not provide (per_neuron_scales: "
+            "false); compile with stage_gains='weights' or 'none'",
+            node=pop.origin.get("node", pop.id))
+    top = max(par.scales, default=1.0)
+    v_th = max(1.0, float(np.rint(par.v_th / unit)))
+    v_reset = float(np.rint(par.v_reset / unit))
+    if _needs_threshold_grid(par, profile):
+        grid = 2.0 ** profile.threshold_shift  # the unit was divided by it: whole in grid steps
+        v_th = max(grid, float(np.rint(par.v_th / (unit * grid)) * grid))
+    for what, v in (("threshold", v_th * top), ("reset", v_reset * top)):
+        _fit(pop, what, v, profile)
+    phases, bias_error = [], 0.0
     for ph in par.phases:
-        b = float(np.rint(ph.bias / scale))
-        _fit(pop, "bias", b, limit, profile)
+        b = float(np.rint(ph.bias / unit))
+        b = bias_value(b, mantissa_bits=profile.bias_mantissa_bits,
+                       exponent_max=profile.bias_exponent_max)
+        bias_error = max(bias_error, abs(b * unit - ph.bias))
+        _fit(pop, "bias", b * top, profile)
         phases.append(ph.model_copy(update={"bias": b}))
     new = par.model_copy(update={
         "v_th": v_th, "v_reset": v_reset, "phases": tuple(phases),
         "du": float(np.rint(par.du * DECAY_ONE) / DECAY_ONE),
         "dv": float(np.rint(par.dv * DECAY_ONE) / DECAY_ONE)})
-    info = {"scale": scale, "v_th": v_th, "threshold_error": abs(v_th * scale - par.v_th)}
+    info = {"scale": unit, "v_th": v_th, "threshold_error": abs(v_th * unit - par.v_th),
+            "bias_error": bias_error, "max_neuron_scale": top}
     return new, info
+
+
+def _projection_terms(p, pop: Population, unit: float, exact: bool,
+                      profile: HardwareProfile, record: QuantizeRecord) -> list:
+    """``p`` in the target's weight format: itself, plus split terms of an exact weight."""
+    w = weights_of(p)
+    w_max = (1 << (profile.weight_bits - 1)) - 1
+    terms = weight_terms(w / unit, w_max, profile.weight_exponent_max, exact=exact)
+    q = sum(t for _, t in terms)
+    live = w != 0
+    err = np.abs(q * unit - w)[live]
+    own = float(np.abs(w).max(initial=0.0))
+    extra = [int(np.count_nonzero(t)) for _, t in terms[1:]]
+    record.projections[p.id] = {
+        "scale": unit, "exponent": terms[0][0], "mantissa_bits": profile.weight_bits,
+        "terms": [{"exponent": e, "synapses": int(np.count_nonzero(t))} for e, t in terms],
+        "extra_weights": sum(extra), "exact": exact and not err.any(),
+        "max_abs_error": float(err.max(initial=0.0)),
+        "mean_abs_error": float(err.mean()) if err.size else 0.0,
+        "max_rel_error": float(err.max(initial=0.0) / own) if own else 0.0,
+        "rounded_to_zero": int((live & (q == 0)).sum())}
+    if live.any() and not q[live].any():
+        raise BudgetError(
+            f"{describe(pop)}: fitting its threshold/bias ({pop.params.v_th:.4g}) into "
+            f"{profile.name}'s threshold range needs a unit of {unit:.4g}, at which every "
+            f"weight of projection {p.id!r} (max {own:.4g}) rounds to zero; use fewer time "
+            "steps or a target with wider thresholds", node=pop.origin.get("node", pop.id))
+    out = [with_weights(p, terms[0][1])]
+    out += [replace(with_weights(p, t), id=f"{p.id}__x{i}") for i, (_, t) in
+            enumerate(terms[1:], start=1) if t.any()]
+    return out
 
 
 def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
              long_delays: LongDelays = "error") -> tuple[SpikingNetwork, QuantizeRecord]:
-    """Quantize ``network`` to the profile's weight, threshold and delay widths.
+    """Quantize ``network`` to the profile's weight, threshold, bias and delay formats.
 
     Parameters
     ----------
@@ -153,144 +267,46 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     Raises
     ------
     BudgetError
-        A delay too long (with ``"error"``), or a threshold/bias beyond the threshold bits.
+        A delay too long (with ``"error"``), a threshold/bias beyond the target's range,
+        or per-neuron scales on a target without them.
     """
     profile = load_profile(profile)
     record = QuantizeRecord(profile=profile.name)
     net = relay_long_delays(network, profile, long_delays, record)
     if profile.weight_bits is None:
         return net, record
-    w_max = (1 << (profile.weight_bits - 1)) - 1
     new_pops, new_projs = [], {}
     for pop in net.populations:
         incoming = net.incoming(pop.id)
         if pop.source:
             new_pops.append(pop)
             continue
-        peak = max((float(np.abs(_weights(p)).max(initial=0.0)) for p in incoming), default=0.0)
-        scale = peak / w_max if peak > 0 else 1.0
-        state_scale = _state_scale(pop.params, profile)
-        coarsened = state_scale > scale
-        scale = max(scale, state_scale)  # thresholds and biases must fit their bits too
-        params, info = _quantize_params(pop, scale, profile) if profile.threshold_bits else (
-            pop.params, {"scale": scale})
-        info["weights_coarsened_for_threshold"] = coarsened
+        unit, exact = _state_unit(pop, incoming, profile)
+        terms = {p.id: _projection_terms(p, pop, unit, exact, profile, record) for p in incoming}
+        if exact and _split_share(terms) > MAX_SPLIT_SHARE:
+            # whole weights, but exactness would cost too many extra synapses (levels
+            # trained or chosen for another width): round them in the target's format
+            unit, exact = _state_unit(pop, incoming, profile, allow_exact=False)
+            terms = {p.id: _projection_terms(p, pop, unit, exact, profile, record)
+                     for p in incoming}
+        if _needs_threshold_grid(pop.params, profile):
+            # thresholds are a mantissa << shift and no per-neuron offset can stand in:
+            # the whole population moves up by the shift (weights gain exponent, as a weight
+            # exponent of 0 on Loihi lines the weight up with the threshold's shift)
+            unit /= 2.0 ** profile.threshold_shift
+            terms = {p.id: _projection_terms(p, pop, unit, exact, profile, record)
+                     for p in incoming}
+        new_projs.update(terms)
+        coarsened = not exact and _param_unit(pop.params, profile) >= unit > 0 and incoming
+        params, info = (_quantize_params(pop, unit, profile) if profile.threshold_max
+                        else (pop.params, {"scale": unit}))
+        info.update(weights_coarsened_for_threshold=bool(coarsened), exact=exact)
         record.populations[pop.id] = info
         new_pops.append(pop.model_copy(update={"params": params}))
-        for p in incoming:
-            w = _weights(p)
-            q = np.rint(w / scale)
-            live = w != 0
-            err = np.abs(q * scale - w)[live]
-            own = float(np.abs(w).max(initial=0.0))
-            record.projections[p.id] = {
-                "scale": scale, "max_abs_error": float(err.max(initial=0.0)),
-                "mean_abs_error": float(err.mean()) if err.size else 0.0,
-                "max_rel_error": float(err.max(initial=0.0) / own) if own else 0.0,
-                "rounded_to_zero": int((live & (q == 0)).sum())}
-            if live.any() and not q[live].any():
-                raise BudgetError(
-                    f"{describe(pop)}: fitting its threshold/bias ({pop.params.v_th:.4g}) into "
-                    f"the {profile.threshold_bits} threshold bits of {profile.name} needs a "
-                    f"scale of {scale:.4g}, at which every weight of projection {p.id!r} "
-                    f"(max {own:.4g}) rounds to zero; use fewer time steps or a target with "
-                    "wider thresholds", node=pop.origin.get("node", pop.id))
-            new_projs[p.id] = _with_weights(p, q)
-    out = replace(net, populations=new_pops,
-                  projections=[new_projs.get(p.id, p) for p in net.projections])
+    projections = [q for p in net.projections for q in new_projs.get(p.id, [p])]
+    out = replace(net, populations=new_pops, projections=projections)
     out.meta = {**net.meta, "quantized_for": profile.name}
     return out, record
-
-
-# --------------------------------------------------------------------------- delays
-#: Most relay stages one long delay may need (a 6-bit target: delays up to ~64 k steps).
-MAX_RELAY_STAGES = 1024
-
-def _relay_population(src: Population, stage: int) -> Population:
-    return Population(id=f"{src.id}__relay{stage}", shape=dict(src.shape),
-                      params=NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="subtract"),
-                      origin={**src.origin, "motif": "delay_relay"})
-
-
-def _relay_link(src: str, relay: Population, first_axis: str, delay: int, origin: dict):
-    return StencilProjection(id=f"{relay.id}__in", source=src, target=relay.id,
-                             axes=(first_axis,), kernel=np.ones(1), edge=("clip",),
-                             delays=np.array([delay]), origin={**origin, "motif": "delay_relay"})
-
-
-def _split_by_delay(p, limit: int):
-    """``(near, far)``: the synapses with delay ≤ limit, and the rest with ``limit`` subtracted."""
-    w, d = _weights(p), p.delays
-    far = d > limit
-    near_w, far_w = np.where(far, 0.0, w), np.where(far, w, 0.0)
-    near_d, far_d = np.where(far, 0, d), np.where(far, d - limit, 0)
-    near = replace(_with_weights(p, near_w), delays=near_d)
-    far_p = replace(_with_weights(p, far_w), delays=far_d, id=f"{p.id}__far")
-    return near, far_p
-
-
-def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_delays: LongDelays,
-                      record: QuantizeRecord | None = None) -> SpikingNetwork:
-    """Replace delays beyond ``profile.max_delay_steps`` by relay chains, or raise.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from compiler.hardware import HardwareProfile
-    >>> from compiler.snn import MatrixProjection, Population, SpikingNetwork
-    >>> net = SpikingNetwork(name="d", n_steps=12, populations=[
-    ...     Population(id="x", shape={"i": 1}, source=True), Population(id="y", shape={"o": 1})],
-    ...     projections=[MatrixProjection(id="w", source="x", target="y", contract=("i",),
-    ...                  produce=("o",), weights=np.ones((1, 1)), delays=np.array([[7]]))])
-    >>> out = relay_long_delays(net, HardwareProfile(name="c", delay_bits=2), "relay")
-    >>> [p.id for p in out.populations], [p.max_delay for p in out.projections]
-    (['x', 'y', 'x__relay1', 'x__relay2'], [3, 3, 1])
-    """
-    limit = profile.max_delay_steps
-    if limit is None or all(p.max_delay <= limit for p in network.projections):
-        return network
-    pops = network.population
-    if long_delays != "relay" or limit == 0:
-        p = next(p for p in network.projections if p.max_delay > limit)
-        tgt = pops[p.target]
-        raise BudgetError(
-            f"{describe(tgt)}: projection {p.id!r} has a delay of {p.max_delay} steps but "
-            f"{profile.name} allows at most {limit} ({profile.delay_bits} delay bits); "
-            + ("compile with long_delays='relay' to insert relay neurons, or use fewer time "
-               "steps" if limit else "a target without delays cannot relay them; use a target "
-               "with delay bits"),
-            node=tgt.origin.get("node", p.id))
-    deepest = max(network.projections, key=lambda p: p.max_delay)
-    stages = -(-deepest.max_delay // limit) - 1
-    if stages > MAX_RELAY_STAGES:  # each stage is a loop turn and a population: refuse early
-        tgt = pops[deepest.target]
-        raise BudgetError(
-            f"{describe(tgt)}: projection {deepest.id!r} has a delay of {deepest.max_delay} "
-            f"steps, which needs {stages} relay stages of at most {limit} steps (over the "
-            f"limit of {MAX_RELAY_STAGES}); use fewer time steps or a target with more delay "
-            "bits", node=tgt.origin.get("node", deepest.id))
-    new_pops = list(network.populations)
-    projs: list = []
-    relays: dict[tuple[str, int], Population] = {}
-    todo = [(p, 0) for p in network.projections]
-    while todo:
-        p, stage = todo.pop(0)
-        if p.max_delay <= limit:
-            projs.append(p)
-            continue
-        near, far = _split_by_delay(p, limit)
-        if np.any(_weights(near) != 0):
-            projs.append(near)
-        key = (p.source.split("__relay")[0], stage + 1)
-        if key not in relays:
-            src = pops[key[0]]
-            relays[key] = _relay_population(src, stage + 1)
-            new_pops.append(relays[key])
-            projs.append(_relay_link(p.source, relays[key], src.axes[0], limit, p.origin))
-            if record is not None:
-                record.relays.append(relays[key].id)
-        todo.append((replace(far, source=relays[key].id), stage + 1))
-    return replace(network, populations=new_pops, projections=projs)
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 from compiler.hardware import BUDGETS, load_profile
 from compiler.report.boundaries import boundary_rows
+from compiler.report.formats import format_rows
 from compiler.report.frame_io import frame_io
 from compiler.report.opcounts import graph_cfar_op_counts
 from compiler.report.render import Report
@@ -142,5 +143,6 @@ def build_report(program, *, sim_results: Sequence | None = None,
         "cores": cores,
         "traffic": dict(placement.traffic) if placement is not None else {},
         "totals": totals,
+        "formats": format_rows(program),
     }
     return Report(data)

@@ -97,6 +97,9 @@ class Report:
                      if lat.get("max_step_s") else "") + "."]
         if lat.get("step_note"):
             lines += ["", f"Note: {lat['step_note']}."]
+        if d.get("formats"):
+            lines += ["", "## Number formats and dynamic-range mechanisms", ""]
+            lines += _table(d["formats"], ("node", "item", "mechanism", "detail", "cost"))
         lines += ["", "## Totals", ""]
         lines += _table([d["totals"]], tuple(d["totals"]))
         lines += ["", f"## Spike traffic per frame ({d['traffic'].get('basis', '')})", ""]

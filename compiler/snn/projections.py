@@ -39,7 +39,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Literal
 
@@ -48,7 +48,8 @@ import scipy.sparse as sp
 
 from ir.errors import NetworkError
 
-__all__ = ["MatrixProjection", "StencilProjection", "Projection", "EdgeMode"]
+__all__ = ["MatrixProjection", "StencilProjection", "Projection", "EdgeMode", "weights_of",
+           "with_weights"]
 
 EdgeMode = Literal["wrap", "clip"]
 
@@ -311,3 +312,25 @@ class StencilProjection:
 
 
 Projection = MatrixProjection | StencilProjection
+
+
+def weights_of(p: Projection) -> np.ndarray:
+    """The stored weight array of a projection: a stencil's kernel, a matrix's dense
+    weights or its sparse values.
+
+    Examples
+    --------
+    >>> weights_of(StencilProjection(id="s", source="a", target="b", axes=("i",),
+    ...                              kernel=np.array([1.0, -1.0, 0.5]), edge=("clip",))).tolist()
+    [1.0, -1.0, 0.5]
+    """
+    if isinstance(p, StencilProjection):
+        return p.kernel
+    return p.weights if p.weights is not None else p.values
+
+
+def with_weights(p: Projection, w: np.ndarray) -> Projection:
+    """``p`` with its stored weight array (as :func:`weights_of` returns it) replaced."""
+    if isinstance(p, StencilProjection):
+        return replace(p, kernel=w)
+    return replace(p, weights=w) if p.weights is not None else replace(p, values=w)

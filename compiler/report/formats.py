@@ -1,0 +1,74 @@
+"""The report's number-format section: what each dynamic-range mechanism chose and costs.
+
+One row per mechanism instance of a compiled program, from the networks themselves and the
+quantize pass's record (``records["quantize"]``):
+
+* ``weight_format`` — per projection: its exponent, mantissa width and whether it is exact;
+* ``split_synapses`` — a projection whose whole weights needed further terms (the OS-CFAR's
+  odd clipped-edge ranks): the extra synapse instances they wire;
+* ``neuron_scales`` — per-neuron threshold/bias scales (the S-FT's per-neuron gains): the
+  neurons that carry one, the largest scale, and the per-neuron parameter memory (one
+  bias exponent and one initial membrane per neuron, ``3 + state_bits`` bits — assumed);
+* ``weight_rounding`` — per time-coded layer: its weight width and rounding rule.
+
+Examples
+--------
+>>> from compiler.program import CompiledProgram
+>>> from ir import Graph
+>>> format_rows(CompiledProgram(graph=Graph.from_dict({"name": "e", "nodes": []})))
+[]
+"""
+
+from __future__ import annotations
+
+from math import prod
+
+from compiler.hardware import load_profile
+
+__all__ = ["format_rows"]
+
+
+def _instances(net, proj) -> int:
+    pops = net.population
+    src = pops[proj.source]
+    if proj.kind == "matrix":
+        return src.size // prod(src.shape[a] for a in proj.contract) * proj.n_synapses
+    return pops[proj.target].size * proj.n_taps
+
+
+def format_rows(program) -> list[dict]:
+    """Rows ``{node, item, mechanism, detail, cost}`` for the report (see the module doc)."""
+    profile = load_profile(program.target)
+    records = program.records.get("quantize") or []
+    rows: list[dict] = []
+    for k, net in enumerate(program.networks):
+        rec = records[k].projections if k < len(records) else {}
+        for proj in net.projections:
+            node = proj.origin.get("node", proj.id)
+            r = rec.get(proj.id)
+            if r is not None:
+                rows.append({"node": node, "item": proj.id, "mechanism": "weight_format",
+                             "detail": f"{r['mantissa_bits']}-bit mantissa x 2^{r['exponent']}"
+                                       + (", exact" if r.get("exact") else
+                                          f", max rel. error {r['max_rel_error']:.2g}"),
+                             "cost": ""})
+            if "__x" in proj.id:
+                rows.append({"node": node, "item": proj.id, "mechanism": "split_synapses",
+                             "detail": "a further term of whole weights beyond one exponent",
+                             "cost": f"{_instances(net, proj):,} synapses"})
+        bits = 3 + (profile.state_bits or 24)
+        for pop in net.populations:
+            par = pop.params
+            if par.scale_axis is not None:
+                rows.append({"node": pop.origin.get("node", pop.id), "item": pop.id,
+                             "mechanism": "neuron_scales",
+                             "detail": f"per-{par.scale_axis} threshold/bias scale up to "
+                                       f"{max(par.scales):g}",
+                             "cost": f"{pop.size:,} neurons x {bits} bits = "
+                                     f"{pop.size * bits / 8192:.1f} kB"})
+        for node, ch in (net.meta.get("charging") or {}).items():
+            rule = ",".join(sorted(set(ch.get("rounding") or ["nearest"])))
+            rows.append({"node": node, "item": node, "mechanism": "weight_rounding",
+                         "detail": f"{ch.get('weight_bits')}-bit levels, {rule}, "
+                                   f"{ch.get('kind')} charging", "cost": ""})
+    return rows
