@@ -193,7 +193,10 @@ def main(argv: list[str] | None = None) -> int:
             "that many chips (`chips` raised; accuracy does not depend on placement).", ""]
           if BOARDS else [])])
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+        out = Path(args.out)
+        old = out.read_text(encoding="utf-8") if out.is_file() else ""
+        notes = old[old.index("## Notes"):] if "## Notes" in old else ""  # hand-written
+        out.write_text(text + ("\n" + notes if notes else ""), encoding="utf-8")
     print(f"\n{seconds:.0f} s; written to {args.out}")
     return 0
 

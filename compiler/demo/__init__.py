@@ -63,6 +63,8 @@ class DemoReport:
                     status += " (aliased Doppler)"
                 lines.append(f"  {t.range_m:8.2f} {t.velocity_mps:7.2f} {t.rcs_dbsm:5.1f}  "
                              f"{truth:>11}  {got:>12}  {spk:>10}  {status}")
+                if t.lost_at:
+                    lines.append(f"           lost by the spiking chain at the {t.lost_at}")
             lines.append(f"  conventional: found {s.n_found}/{s.n_targets} targets; {s.n_peaks} "
                          f"detection peaks: {s.n_clutter} static clutter (zero Doppler), "
                          f"{s.n_false} elsewhere not at a target")
