@@ -26,6 +26,7 @@ from backends.artifact import read_manifest
 from backends.atomic import stale_temporaries, write_atomic
 from backends.manifest import HASH_KEY
 from backends.program_artifact import read_program_manifest
+from compiler.cli import main
 from compiler.compile import compile_graph
 from ir import Graph
 from ir.errors import ArtifactError
@@ -126,6 +127,31 @@ def test_a_full_disk_during_emit_leaves_no_temporaries(programs, tmp_path, disk_
     with disk_full(free=5000), pytest.raises(ArtifactError, match="pkg.*No space left"):
         emit_numpy(programs[1], tmp_path / "pkg")
     assert not [p for p in listing(tmp_path) if p.endswith(".tmp")]
+
+
+def test_run_output_on_a_full_disk_names_the_file_and_keeps_the_old_one(
+        programs, tmp_path, disk_full, capsys):
+    art = save_program(programs[1], tmp_path / "art")
+    np.save(tmp_path / "x.npy", X["a"])
+    out = tmp_path / "out.npz"
+    argv = ["run", str(art), "-i", str(tmp_path / "x.npy"), "-o", str(out), "--quiet"]
+    before = listing(tmp_path)
+    with disk_full(free=100):
+        assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and len(err.strip().splitlines()) == 1
+    assert str(out) in err and "No space left on device" in err
+    assert listing(tmp_path) == before  # no truncated out.npz, no temporary
+    assert main(argv) == 0
+    good = out.read_bytes()
+    with disk_full(free=0):
+        assert main(argv) == 2
+    assert out.read_bytes() == good and listing(tmp_path) == sorted(before + ["out.npz"])
+    assert np.load(out)["o"].shape == (8,)
+    with disk_full(free=10):
+        assert main(["schema", "-o", str(tmp_path / "schema.json")]) == 2
+    assert "schema.json" in capsys.readouterr().err
+    assert not (tmp_path / "schema.json").exists()
 
 
 def test_without_an_atomic_exchange_the_old_tree_is_renamed_aside_then_removed(

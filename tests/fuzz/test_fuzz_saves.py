@@ -13,7 +13,8 @@ network, either program.
   kills real processes.)
 * **full disk**: a byte budget (and ``ENOSPC``, ``EDQUOT``, ``EFBIG`` or ``EIO``) for
   every write below the folder: the save raises an ``ArtifactError`` naming the folder,
-  the old tree is byte for byte unchanged and nothing else is left.
+  the old tree is byte for byte unchanged and nothing else is left; ``radarsnn run -o``
+  under a full disk exits 2 and leaves the previous output (or none) and no temporary.
 """
 
 from __future__ import annotations
@@ -145,3 +146,35 @@ def test_a_full_disk_at_any_byte_changes_nothing(tmp_path, start, stray, new, fr
             return
     assert sorted(os.listdir(root)) == names
     assert (tree_bytes(target) if target.exists() else None) == before
+
+
+@pytest.fixture(scope="module")
+def run_files(tmp_path_factory):
+    root = tmp_path_factory.mktemp("run")
+    np.save(root / "x.npy", X["a"])
+    return save_program(ONE, root / "art"), root / "x.npy"
+
+
+@budget(0.02)
+@given(st.floats(0.0, 1.0), st.sampled_from([errno.ENOSPC, errno.EDQUOT, errno.EIO]),
+       st.booleans(), st.sampled_from(["out.npz", "out", "sub/out.npz"]))
+def test_run_outputs_on_a_full_disk_are_complete_or_absent(tmp_path, run_files, fraction, code,
+                                                           previous, name) -> None:
+    from compiler.cli import main
+
+    art, x = run_files
+    root = Path(tempfile.mkdtemp(dir=tmp_path))
+    (root / "sub").mkdir()
+    out = root / name
+    argv = ["run", str(art), "-i", str(x), "-o", str(out), "--quiet"]
+    final = out if name.endswith(".npz") else out.with_name(out.name + ".npz")
+    if previous:
+        final.write_bytes(b"the previous output")
+    before = tree_bytes(root)
+    with pytest.MonkeyPatch.context() as mp, DiskFull(mp, root)(int(fraction * 600), code):
+        status = main(argv)
+    if status == 0:  # it fitted: the whole output
+        assert np.load(final)["o"].shape == (8,)
+        return
+    assert status == 2
+    assert tree_bytes(root) == before  # nothing truncated, no temporary
