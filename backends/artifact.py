@@ -218,9 +218,9 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
 
 
 def write_files(folder: Path, files: Mapping[str, bytes]) -> None:
-    """Create each of ``files`` in the existing ``folder``, synced to the disk."""
+    """Create each of ``files`` in the existing ``folder`` (synced by ``replace_directory``)."""
     for name, data in files.items():
-        write_file(folder / name, data)
+        write_file(folder / name, data, sync=False)
 
 
 def read_manifest(directory: str | Path) -> dict:

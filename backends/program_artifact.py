@@ -149,9 +149,9 @@ def _write_program(program: CompiledProgram, folder: Path, extra: Mapping | None
         "report": None if report is None else report.to_json(indent=None),
         "extra": plain_json(dict(extra or {}), "extra"),
     }
-    write_file(folder / PROGRAM_FILE, render_json(seal(body)))
+    write_file(folder / PROGRAM_FILE, render_json(seal(body)), sync=False)  # synced with the tree
     if report is not None:
-        write_file(folder / "report.md", report.to_markdown().encode("utf-8"))
+        write_file(folder / "report.md", report.to_markdown().encode("utf-8"), sync=False)
 
 
 def _jsonable(options: Mapping) -> dict:

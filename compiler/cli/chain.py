@@ -60,7 +60,7 @@ def write_output(path: str | Path, data: bytes, what: str) -> None:
     from backends.atomic import write_atomic
 
     try:
-        write_atomic(Path(path), data)
+        write_atomic(Path(path), data, durable=True)
     except (OSError, ValueError) as err:  # ValueError: a NUL byte, an empty file name
         reason = getattr(err, "strerror", None) or err
         raise RadarSNNError(f"cannot write {what} to {path}: {reason} (nothing was written; "

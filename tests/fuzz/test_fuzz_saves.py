@@ -105,7 +105,7 @@ class _Snapshots:
         return call
 
 
-@budget(0.03)
+@budget(0.025)
 @given(st.sampled_from(STARTS), st.booleans(), st.sampled_from(sorted(OBJECTS)))
 def test_a_crash_at_any_step_leaves_the_old_or_the_new_artifact(tmp_path, start, stray,
                                                                  new) -> None:
@@ -123,7 +123,7 @@ def test_a_crash_at_any_step_leaves_the_old_or_the_new_artifact(tmp_path, start,
     shutil.rmtree(shots._where)
 
 
-@budget(0.05)
+@budget(0.03)
 @given(st.sampled_from(STARTS), st.booleans(), st.sampled_from(sorted(OBJECTS)),
        st.floats(0.0, 1.0),
        st.sampled_from([errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO]))
