@@ -70,6 +70,7 @@ from pydantic import ValidationError
 from backends.artifact_codec import network_from_manifest, population_entry, projection_entry
 from backends.artifact_io import (
     ARRAYS_FILE,
+    ARTIFACT_ENTRIES,
     MANIFEST_FILE,
     finite_json,
     npz_bytes,
@@ -78,8 +79,8 @@ from backends.artifact_io import (
     read_npz,
     render_json,
     sha256_hex,
-    write_atomic,
 )
+from backends.atomic import replace_directory, write_file
 from backends.manifest import radarsnn_version, read_manifest_file, seal
 from compiler.snn import (
     MatrixProjection,
@@ -93,8 +94,10 @@ __all__ = [
     "ARTIFACT_VERSION",
     "PROJECTION_KINDS",
     "load",
+    "network_files",
     "read_manifest",
     "save",
+    "write_files",
 ]
 
 #: Format name written into every manifest.
@@ -106,50 +109,26 @@ PROJECTION_KINDS: Mapping[str, type] = MappingProxyType(
     {"matrix": MatrixProjection, "stencil": StencilProjection}
 )
 
-def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | None = None,
-         kinds: Mapping[str, type] = PROJECTION_KINDS) -> Path:
-    """Write ``network`` as an artifact directory (created if needed; its two files replaced).
+def network_files(network: SpikingNetwork, *, extra: Mapping | None = None,
+                  kinds: Mapping[str, type] = PROJECTION_KINDS) -> tuple[dict, dict[str, bytes]]:
+    """The manifest and the bytes of both files of ``network``'s artifact (nothing written).
 
     Parameters
     ----------
-    network : SpikingNetwork
-        A network that passes :meth:`~compiler.snn.SpikingNetwork.validate`.
-    directory : str or Path
-        Where to write ``manifest.json`` and ``arrays.npz``.
-    extra : mapping, optional
-        Caller's JSON data stored under the manifest key ``extra`` (read it back
-        with :func:`read_manifest`).
-    kinds : mapping of str to type
-        The projection registry; every projection's ``kind`` must be in it.
+    network, extra, kinds
+        As for :func:`save`.
 
     Returns
     -------
-    Path
-        ``directory``.
+    manifest : dict
+        The sealed manifest (its ``manifest_sha256`` identifies the artifact).
+    files : dict of str to bytes
+        ``{"arrays.npz": ..., "manifest.json": ...}``.
 
     Raises
     ------
-    NetworkError
-        If ``network`` does not validate.
-    ArtifactError
-        If ``meta``/``extra`` is not plain JSON, a projection kind is unknown, or
-        a file cannot be written.
-
-    Notes
-    -----
-    Equal networks give byte-identical files (fixed key order, fixed zip dates,
-    no compression), so artifacts can be compared and cached by hash.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from compiler.snn import Encoder, Population, RateCode, SpikingNetwork
-    >>> net = SpikingNetwork(name="src", n_steps=4,
-    ...     populations=[Population(id="in", shape={"i": 3}, source=True)],
-    ...     encoders=[Encoder(port="x", population="in", code=RateCode())])
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     save(net, tmp).joinpath("manifest.json").is_file()
-    True
+    NetworkError, ArtifactError
+        As for :func:`save` (before any file is touched).
     """
     network.validate()
     arrays: dict[str, np.ndarray] = {}
@@ -176,15 +155,72 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
         "arrays": {"file": ARRAYS_FILE, "sha256": sha256_hex(npz), "n_bytes": len(npz)},
     }
     manifest = seal(body)
+    return manifest, {ARRAYS_FILE: npz, MANIFEST_FILE: render_json(manifest)}
+
+
+def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | None = None,
+         kinds: Mapping[str, type] = PROJECTION_KINDS) -> Path:
+    """Write ``network`` as an artifact directory, atomically (created, or replaced as a whole).
+
+    Parameters
+    ----------
+    network : SpikingNetwork
+        A network that passes :meth:`~compiler.snn.SpikingNetwork.validate`.
+    directory : str or Path
+        The artifact directory: new, empty, or an artifact (of either kind) to
+        replace.  It then holds exactly ``manifest.json`` and ``arrays.npz``.
+    extra : mapping, optional
+        Caller's JSON data stored under the manifest key ``extra`` (read it back
+        with :func:`read_manifest`).
+    kinds : mapping of str to type
+        The projection registry; every projection's ``kind`` must be in it.
+
+    Returns
+    -------
+    Path
+        ``directory``.
+
+    Raises
+    ------
+    NetworkError
+        If ``network`` does not validate.
+    ArtifactError
+        If ``meta``/``extra`` is not plain JSON, a projection kind is unknown, the
+        directory holds files that are not an artifact's, or a file cannot be
+        written (the directory is then unchanged).
+
+    Notes
+    -----
+    Equal networks give byte-identical files (fixed key order, fixed zip dates,
+    no compression), so artifacts can be compared and cached by hash.  The files
+    are written into a hidden sibling directory, synced, and swapped into place
+    in one rename (:func:`backends.atomic.replace_directory`): a crash or a full
+    disk leaves the previous artifact or the new one, never a mixture.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from compiler.snn import Encoder, Population, RateCode, SpikingNetwork
+    >>> net = SpikingNetwork(name="src", n_steps=4,
+    ...     populations=[Population(id="in", shape={"i": 3}, source=True)],
+    ...     encoders=[Encoder(port="x", population="in", code=RateCode())])
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     save(net, tmp).joinpath("manifest.json").is_file()
+    True
+    """
+    _, files = network_files(network, extra=extra, kinds=kinds)
     folder = Path(directory)
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        write_atomic(folder / ARRAYS_FILE, npz)
-        write_atomic(folder / MANIFEST_FILE, render_json(manifest))
+        replace_directory(folder, lambda tmp: write_files(tmp, files), owned=ARTIFACT_ENTRIES)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot write the artifact to {folder}: {exc}") from exc
     return folder
 
+
+def write_files(folder: Path, files: Mapping[str, bytes]) -> None:
+    """Create each of ``files`` in the existing ``folder`` (synced by ``replace_directory``)."""
+    for name, data in files.items():
+        write_file(folder / name, data, sync=False)
 
 
 def read_manifest(directory: str | Path) -> dict:

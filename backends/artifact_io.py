@@ -1,5 +1,5 @@
 """Deterministic bytes for artifacts: canonical JSON, SHA-256, a reproducible ``.npz``,
-atomic writes and checked reads.
+checked reads (atomic writes: :mod:`backends.atomic`, re-exported here).
 
 Nothing here knows about networks; :mod:`backends.artifact` builds the format on top.
 Every writer is a pure function of its input (sorted keys, fixed zip dates and
@@ -19,10 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from backends.atomic import write_atomic
 from ir.errors import ArtifactError
 
 __all__ = [
     "ARRAYS_FILE",
+    "ARTIFACT_ENTRIES",
     "MANIFEST_FILE",
     "canonical_json",
     "finite_json",
@@ -38,6 +40,11 @@ __all__ = [
 #: The two files of an artifact directory (see :mod:`backends.artifact`).
 MANIFEST_FILE = "manifest.json"
 ARRAYS_FILE = "arrays.npz"
+
+#: Every entry an artifact directory of either kind holds (network: the two files above;
+#: program: ``program.json``, ``report.md``, ``networks/``); saving replaces only these.
+ARTIFACT_ENTRIES = frozenset({MANIFEST_FILE, ARRAYS_FILE, "program.json", "report.md",
+                              "networks"})
 
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
 
@@ -241,32 +248,6 @@ def read_npz(raw: bytes, path: Path) -> dict[str, np.ndarray]:
             return {key: npz[key] for key in npz.files}
     except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
         raise ArtifactError(f"{path}: not a readable .npz of plain arrays ({exc})") from exc
-
-
-def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path.tmp``, then rename it over ``path``.
-
-    Parameters
-    ----------
-    path : Path
-    data : bytes
-
-    Raises
-    ------
-    OSError
-        If the file cannot be written (the caller wraps it).
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     write_atomic(Path(tmp) / "f", b"x")
-    ...     read_bytes(Path(tmp) / "f")
-    b'x'
-    """
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(data)
-    tmp.replace(path)
 
 
 def read_bytes(path: Path) -> bytes:

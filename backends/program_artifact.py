@@ -37,9 +37,9 @@ import json
 from collections.abc import Mapping
 from pathlib import Path
 
-from backends.artifact import load, read_manifest, save
-from backends.artifact_io import plain_json, render_json
-from backends.artifact_io import write_atomic as _write
+from backends.artifact import load, network_files, read_manifest, write_files
+from backends.artifact_io import ARTIFACT_ENTRIES, plain_json, render_json
+from backends.atomic import replace_directory, write_file
 from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, seal
 from compiler.program import CompiledProgram, Segment
 from ir import Graph
@@ -82,15 +82,16 @@ def _segment_entry(seg: Segment, digests: list[str]) -> dict:
 
 def save_program(program: CompiledProgram, directory: str | Path, *,
                  extra: Mapping | None = None) -> Path:
-    """Write ``program`` as a program artifact directory (created if needed).
+    """Write ``program`` as a program artifact directory, atomically (created or replaced).
 
     Parameters
     ----------
     program : CompiledProgram
         What :func:`compiler.compile.compile_graph` returned.
     directory : str or Path
-        The artifact directory; its ``program.json``, ``report.md`` and
-        ``networks/`` are replaced.
+        The artifact directory: new, empty, or an artifact (of either kind) to
+        replace as a whole — ``program.json``, ``report.md`` and ``networks/``
+        (no network folder of an earlier program is left behind).
     extra : mapping, optional
         Caller's JSON data stored under ``extra``.
 
@@ -102,20 +103,36 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
     Raises
     ------
     ArtifactError
-        Options, report or ``extra`` that are not plain JSON, or a file that
-        cannot be written.
+        Options, report or ``extra`` that are not plain JSON, a directory holding
+        files that are not an artifact's, or a file that cannot be written (the
+        directory is then unchanged).
+
+    Notes
+    -----
+    The tree is written into a hidden sibling directory, synced, and swapped into
+    place in one rename (:func:`backends.atomic.replace_directory`): a crash or a
+    full disk leaves the previous program or the new one, never a mixture.
     """
     folder = Path(directory)
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        replace_directory(folder, lambda tmp: _write_program(program, tmp, extra),
+                          owned=ARTIFACT_ENTRIES)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
-        raise ArtifactError(f"cannot create the program artifact folder {folder}: {exc}") from exc
+        raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
+    return folder
+
+
+def _write_program(program: CompiledProgram, folder: Path, extra: Mapping | None) -> None:
+    """The files of ``program``'s artifact, into the empty ``folder``."""
     digests: list[str] = []
     segments = []
     for seg in program.segments:
         if seg.kind == "spiking":
-            net_dir = save(seg.network, folder / "networks" / str(len(digests)))
-            digests.append(read_manifest(net_dir)[HASH_KEY])
+            manifest, files = network_files(seg.network)
+            net_dir = folder / "networks" / str(len(digests))
+            net_dir.mkdir(parents=True)
+            write_files(net_dir, files)
+            digests.append(manifest[HASH_KEY])
         segments.append(_segment_entry(seg, digests))
     report = program.records.get("report")
     target = program.target
@@ -132,14 +149,9 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
         "report": None if report is None else report.to_json(indent=None),
         "extra": plain_json(dict(extra or {}), "extra"),
     }
-    manifest = seal(body)
-    try:
-        _write(folder / PROGRAM_FILE, render_json(manifest))
-        if report is not None:
-            _write(folder / "report.md", report.to_markdown().encode("utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
-    return folder
+    write_file(folder / PROGRAM_FILE, render_json(seal(body)), sync=False)  # synced with the tree
+    if report is not None:
+        write_file(folder / "report.md", report.to_markdown().encode("utf-8"), sync=False)
 
 
 def _jsonable(options: Mapping) -> dict:

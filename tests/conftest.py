@@ -35,3 +35,14 @@ def shared_data() -> Path:
             pytest.fail(f"real captures not found at {path}; CI must have shared/ beside the clone")
         pytest.skip(f"real captures not found at {path}; set RADARSNN_DATA to shared/data")
     return path
+
+
+@pytest.fixture
+def disk_full(monkeypatch, tmp_path):
+    """``with disk_full(free=n):`` — writes below ``tmp_path`` fail with ENOSPC after ``n`` bytes.
+
+    See ``tests/faults.py`` (``os.write``, ``open`` and ``io.open`` are patched).
+    """
+    from faults import DiskFull
+
+    return DiskFull(monkeypatch, tmp_path)

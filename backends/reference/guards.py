@@ -22,13 +22,15 @@ Memory model (bytes; ``F`` frames, ``S`` sizes of the populations, ``T`` steps,
         mode: trains read ahead}}
       + \underbrace{T\textstyle\sum_p S_p}_{\text{rasters, if recorded}}\Big)
 
-Time model (seconds): neuron updates at :data:`NEURON_UPDATES_PER_S`
-(``F·T·Σ S`` in step mode, :data:`CLOSED_SPEEDUP` times fewer in closed form),
-synaptic operations at :data:`SYNAPSE_OPS_PER_S` (every synapse instance once
-per source spike: one for latency codes and fire-once neurons, up to
-``max_rate·T`` for rate codes and ``T/2`` for neurons that fire repeatedly),
-plus :data:`STEP_OVERHEAD_S` per population and step in step mode.  Both are
-estimates of the leading terms within a small factor, not bounds.
+Time model (seconds), step mode: neuron updates at :data:`NEURON_UPDATES_PER_S`
+(``F·T·Σ S``), synaptic operations at :data:`SYNAPSE_OPS_PER_S` (every synapse
+instance once per source spike: one for latency codes and fire-once neurons, up to
+``max_rate·T`` for rate codes and ``T/2`` for neurons that fire repeatedly), plus
+:data:`STEP_OVERHEAD_S` per population and step.  Closed form: ``F`` times
+:func:`~backends.reference.closed_cost.closed_time_per_frame` (per neuron, per
+synapse by delivery path, and only the driven segments per step; the engine is
+linear in ``F``).  Both are estimates of the leading terms within a small factor
+(measured: ``benchmarks/closed_scaling.py``), not bounds.
 
 Examples
 --------
@@ -57,26 +59,25 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from math import prod
 
+from backends.reference.closed_cost import (
+    NEURON_UPDATES_PER_S,
+    SYNAPSE_OPS_PER_S,
+    closed_time_per_frame,
+    spikes_per_neuron,
+)
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
 
-__all__ = ["CLOSED_SPEEDUP", "MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_UPDATES_PER_S",
-           "STEP_OVERHEAD_S", "SYNAPSE_OPS_PER_S", "SimEstimate", "check_simulation",
-           "estimate_simulation", "frames_in", "human_bytes"]
+__all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_UPDATES_PER_S", "STEP_OVERHEAD_S",
+           "SYNAPSE_OPS_PER_S", "SimEstimate", "check_simulation", "estimate_simulation",
+           "frames_in", "human_bytes"]
 
 #: Default memory limit of one simulation: 8 GiB (a third of a 24 GB machine).
 MAX_MEMORY_BYTES = 8 << 30
 #: Default limit on the estimated wall-clock time of one simulation, s.
 MAX_TIME_S = 3600.0
-#: Vectorised neuron updates per second (one core, numpy).
-NEURON_UPDATES_PER_S = 2e8
-#: Synaptic multiply-adds per second (one core, BLAS or gathers).
-SYNAPSE_OPS_PER_S = 1e9
 #: Python overhead of one population in one step of the step engine, s.
 STEP_OVERHEAD_S = 2e-5
-#: How much faster the closed form updates neurons than the step engine (driven segments
-#: still run their recurrences over the steps, vectorised over them).
-CLOSED_SPEEDUP = 8
 
 _CSR_BYTES = 20        # value 8 + column index 8 + a share of the row pointers and temporaries
 _STATE_BYTES = 16      # first spike + spike count, every population
@@ -135,17 +136,6 @@ def _nnz(proj) -> int:
     return int(proj.n_synapses)
 
 
-def _spikes_per_neuron(network: SpikingNetwork, pid: str) -> float:
-    """Spikes one neuron of ``pid`` sends in a frame (an estimate, see the module)."""
-    pop = network.population[pid]
-    if pop.source:
-        enc = next((e for e in network.encoders if e.population == pid), None)
-        if enc is not None and enc.code.type == "rate":
-            return enc.code.max_rate * network.n_steps
-        return 1.0
-    return 1.0 if pop.params.reset == "fire_once" else network.n_steps / 2
-
-
 def estimate_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "step",
                         record_spikes: bool = False) -> SimEstimate:
     """Estimate memory and time of simulating ``n_frames`` frames of ``network``.
@@ -183,7 +173,7 @@ def estimate_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "
         else:
             delivery = max(delivery, 16 * (src.size + tgt.size))
             instances = tgt.size * q.n_taps
-        synapse_ops += instances * _spikes_per_neuron(network, q.source)
+        synapse_ops += instances * spikes_per_neuron(network, q.source)
         if mode == "step" and src.source:  # the train's currents computed ahead in blocks
             per_frame += _AHEAD_BYTES * src.size
     per_frame += delivery
@@ -191,8 +181,7 @@ def estimate_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "
         per_frame += network.n_steps * sizes
     neurons = sum(p.size for p in pops if not p.source)
     if mode == "closed":
-        time_s = n_frames * (network.n_steps * neurons / (CLOSED_SPEEDUP * NEURON_UPDATES_PER_S)
-                             + synapse_ops / SYNAPSE_OPS_PER_S)
+        time_s = n_frames * closed_time_per_frame(network)
     else:
         time_s = (n_frames * (network.n_steps * neurons / NEURON_UPDATES_PER_S
                               + synapse_ops / SYNAPSE_OPS_PER_S)

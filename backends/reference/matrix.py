@@ -25,7 +25,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
-from backends.reference.row_sums import grouped_sums, n_runs, run_starts
+from backends.reference.row_sums import distinct_rows, grouped_sums, n_runs, run_starts
 from backends.reference.signed_factor import SignedFactor, distinct_up_to_sign, signed_factor
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
@@ -303,9 +303,9 @@ class MatrixDelivery:
             return None, self._folded_product(k, events, n_batch, values)
         rows, cols = self.event_rows(events, n_batch)
         if sp.issparse(weights):
-            hit, local = np.unique(rows, return_inverse=True)
+            hit, local = distinct_rows(rows, n_batch * self.n_reps)
             data = np.ones(events.size, dtype) if values is None else values.astype(dtype)
-            one_hot = sp.csr_matrix((data, (local.ravel(), cols)), shape=(hit.size, self.n_in))
+            one_hot = sp.csr_matrix((data, (local, cols)), shape=(hit.size, self.n_in))
             one_hot.sum_duplicates()
             return hit, (one_hot @ weights).toarray()
         if dense:
@@ -366,8 +366,9 @@ class MatrixDelivery:
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
-        # mode="wrap" reduces flat batch indices to neurons without a division pass
-        return int(np.take(self.source_synapses[k], events, mode="wrap").sum())
+        # flat batch indices -> neurons by one vectorised remainder (np.take's mode="wrap"
+        # subtracts the size in a loop per index: quadratic in the number of frames)
+        return int(self.source_synapses[k][events % self.src_size].sum())
 
     def synapses_per_source(self, k: int) -> np.ndarray:
         """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ir.errors import RadarSNNError
 
-__all__ = ["add_parsers", "load_arrays", "parse_options", "read_npy"]
+__all__ = ["add_parsers", "load_arrays", "parse_options", "read_npy", "write_output"]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -42,10 +42,29 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
     text = json.dumps(chain_schema(), indent=2, sort_keys=True)
     if args.output:
-        Path(args.output).write_text(text + "\n", encoding="utf-8")
+        write_output(args.output, (text + "\n").encode("utf-8"), "the schema")
     else:
         print(text)
     return 0
+
+
+def write_output(path: str | Path, data: bytes, what: str) -> None:
+    """Write a command's output file atomically: complete, or not there at all.
+
+    Raises
+    ------
+    RadarSNNError
+        Naming ``path`` (and the reason, e.g. no space left on the device) when it
+        cannot be written; a previous file at ``path`` is kept, no temporary is left.
+    """
+    from backends.atomic import write_atomic
+
+    try:
+        write_atomic(Path(path), data, durable=True)
+    except (OSError, ValueError) as err:  # ValueError: a NUL byte, an empty file name
+        reason = getattr(err, "strerror", None) or err
+        raise RadarSNNError(f"cannot write {what} to {path}: {reason} (nothing was written; "
+                            "free some space or give another path)") from err
 
 
 def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
@@ -247,7 +266,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     result = simulate(loaded, inputs, mode=args.mode,
                       out_of_range="clip" if args.clip else "reject")
     if args.output:
-        np.savez(args.output, **{k: np.asarray(v) for k, v in result.outputs.items()})
+        from backends.artifact_io import npz_bytes
+
+        path = args.output if str(args.output).endswith(".npz") else f"{args.output}.npz"
+        write_output(path, npz_bytes({k: np.asarray(v) for k, v in result.outputs.items()}),
+                     "the outputs")
     if args.json:
         print(json.dumps({"mode": result.mode, "spikes": result.total_spikes,
                           "synaptic_events": result.total_synaptic_events,

@@ -1,0 +1,120 @@
+"""Simulated file-system faults for tests: a disk that fills up after a given number of bytes.
+
+:class:`DiskFull` patches the three ways the code under test writes bytes — ``os.write``
+(on descriptors of files below the root), ``builtins.open`` and ``io.open`` (files opened for
+writing below the root: ``pathlib``, ``zipfile``, ``np.savez``) — so that once ``free`` bytes
+have been written below ``root`` every further write writes what still fits and raises
+``OSError(errno.ENOSPC)`` (or another errno), as a full disk does.  Reads and files
+elsewhere are untouched.
+"""
+
+from __future__ import annotations
+
+import builtins
+import errno
+import io
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+
+class _Budget:
+    def __init__(self, free: int, code: int) -> None:
+        self.left, self.code, self.failures = free, code, 0
+
+    def take(self, n: int) -> int:
+        """Bytes of ``n`` that still fit (the budget shrinks by that much)."""
+        got = max(0, min(n, self.left))
+        self.left -= got
+        return got
+
+    def error(self) -> OSError:
+        self.failures += 1
+        return OSError(self.code, os.strerror(self.code))
+
+
+class _LimitedFile:
+    """A file object whose ``write`` stops at the budget (everything else delegated)."""
+
+    def __init__(self, f, budget: _Budget) -> None:
+        self._f, self._budget = f, budget
+
+    def write(self, data) -> int:
+        view = memoryview(data).cast("B") if not isinstance(data, str) else data
+        n = self._budget.take(len(view))
+        self._f.write(view[:n])
+        if n < len(view):
+            raise self._budget.error()
+        return n
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._f.close()
+
+    def __iter__(self):
+        return iter(self._f)
+
+    def __getattr__(self, name: str):
+        return getattr(self._f, name)
+
+
+class DiskFull:
+    """``with disk_full(free=100): ...`` — writes below ``root`` fail after 100 bytes."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch, root: Path) -> None:
+        self._monkeypatch, self._root = monkeypatch, str(Path(root).resolve())
+
+    def _under(self, path: object) -> bool:
+        try:
+            return os.path.realpath(os.fsdecode(path)).startswith(self._root)
+        except (TypeError, ValueError):
+            return False
+
+    @contextmanager
+    def __call__(self, free: int, code: int = errno.ENOSPC) -> Iterator[_Budget]:
+        budget = _Budget(free, code)
+        real_write, real_open = os.write, io.open
+
+        def write(fd: int, data) -> int:
+            try:
+                target = os.readlink(f"/proc/self/fd/{fd}")
+            except OSError:
+                target = ""
+            if not self._under(target):
+                return real_write(fd, data)
+            view = memoryview(data).cast("B")
+            n = budget.take(len(view))
+            if n == 0 and len(view):
+                raise budget.error()
+            return real_write(fd, view[:n])  # a short write; the next one raises
+
+        def open_(file, mode="r", *args, **kwargs):
+            f = real_open(file, mode, *args, **kwargs)
+            if any(c in mode for c in "wax+") and not isinstance(file, int) and self._under(file):
+                return _LimitedFile(f, budget)
+            return f
+
+        with self._monkeypatch.context() as m:
+            m.setattr(os, "write", write)
+            m.setattr(io, "open", open_)
+            m.setattr(builtins, "open", open_)
+            yield budget
+
+
+def listing(root: Path) -> list[str]:
+    """Every path below ``root`` (relative, sorted): what a fault may have left behind."""
+    return sorted(str(p.relative_to(root)) for p in Path(root).rglob("*"))
+
+
+def tree_bytes(root: Path) -> dict[str, bytes]:
+    """``{relative path: bytes}`` of every file below ``root``."""
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(Path(root).rglob("*"))
+            if p.is_file()}
+
+
+__all__ = ["DiskFull", "listing", "tree_bytes"]
