@@ -87,6 +87,7 @@ from compiler.snn import (
     StencilProjection,
 )
 from ir.errors import ArtifactError, NetworkError
+from ir.model import short_repr
 
 __all__ = [
     "ARTIFACT_FORMAT",
@@ -224,7 +225,7 @@ def _read_arrays(path: Path, manifest: dict) -> dict[str, np.ndarray]:
     spec = manifest.get("arrays")
     if not isinstance(spec, dict) or spec.get("file") != ARRAYS_FILE:
         raise ArtifactError(f"{path.with_name(MANIFEST_FILE)}: the 'arrays' entry must name "
-                            f"{ARRAYS_FILE!r}, got {spec!r}")
+                            f"{ARRAYS_FILE!r}, got {short_repr(spec)}")
     raw = read_bytes(path)
     digest = sha256_hex(raw)
     if digest != spec.get("sha256") or len(raw) != spec.get("n_bytes"):
@@ -284,8 +285,8 @@ def load(directory: str | Path, *, kinds: Mapping[str, type] = PROJECTION_KINDS
     try:
         return network_from_manifest(manifest, arrays, kinds, path).validate()
     except ValidationError as exc:
-        errors = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']} (got {e['input']!r})"
-                           for e in exc.errors())
+        errors = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']} "
+                           f"(got {short_repr(e['input'])})" for e in exc.errors())
         raise ArtifactError(f"{path}: a {exc.title} entry does not parse: {errors}") from exc
     except NetworkError as exc:
         raise ArtifactError(f"{path}: the stored network is invalid: {exc}", node=exc.node) from exc

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from backends.artifact_io import canonical_json, read_bytes, render_json, sha256_hex
 from ir.errors import ArtifactError
+from ir.model import short_repr
 
 __all__ = ["HASH_KEY", "radarsnn_version", "read_manifest_file", "seal"]
 
@@ -90,11 +91,12 @@ def read_manifest_file(path: Path, *, fmt: str, current: str, what: str, redo: s
         raise ArtifactError(f"{path}: the top level is a {type(manifest).__name__}, not an object")
     found = manifest.get("format")
     if found != fmt:
-        raise ArtifactError(f"{path}: format is {found!r}, expected {fmt!r}; not a {what}")
+        raise ArtifactError(f"{path}: format is {short_repr(found)}, expected {fmt!r}; not a "
+                            f"{what}")
     text = manifest.get("format_version")
     parts = text.split(".") if isinstance(text, str) else []
     if len(parts) != 2 or not all(p.isdigit() for p in parts):
-        raise ArtifactError(f"{path}: format_version {text!r} is not MAJOR.MINOR")
+        raise ArtifactError(f"{path}: format_version {short_repr(text)} is not MAJOR.MINOR")
     major, ours = int(parts[0]), int(current.split(".")[0])
     if major > ours:
         raise ArtifactError(

@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
+from ir.model import short_repr
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -163,8 +164,8 @@ bytes or None (no limit)
         ok = value is None or (isinstance(value, int | float) and not isinstance(value, bool)
                                and value > 0 and value == value)
         if not ok:
-            raise CompileError(f"compile option {name}={value!r} must be a positive number of "
-                               f"{unit} or None (no limit)")
+            raise CompileError(f"compile option {name}={short_repr(value)} must be a positive "
+                               f"number of {unit} or None (no limit)")
     return (None if memory is None else int(memory)), (None if time_s is None else float(time_s))
 
 

@@ -54,7 +54,7 @@ from pydantic import ValidationError
 
 from ir.errors import ChainFileError, IRError
 from ir.graph import Graph
-from ir.model import describe_validation_error, is_name
+from ir.model import describe_validation_error, is_name, short_repr
 from ir.ops import OP_REGISTRY, OpRegistry
 
 __all__ = [
@@ -145,7 +145,7 @@ radarsnn command know the built-in ops only; docs/howto-op.md)
         raise ChainFileError(f"unknown top-level keys {extra}; allowed: {list(_TOP_KEYS)}")
     name = data.get("name", "chain")
     if not isinstance(name, str) or not name:
-        raise ChainFileError(f"chain 'name' must be a non-empty string; got {name!r}")
+        raise ChainFileError(f"chain 'name' must be a non-empty string; got {short_repr(name)}")
     nodes = data.get("nodes")
     if not isinstance(nodes, list):
         raise ChainFileError(
@@ -182,11 +182,12 @@ def _read_envelope(
     """Split one node mapping into id, op class, input ids and op parameters."""
     where = f"chain {name!r}, node #{index}"
     if not isinstance(entry, Mapping):
-        raise ChainFileError(f"{where}: must be a mapping with 'id' and 'op'; got {entry!r}")
+        raise ChainFileError(f"{where}: must be a mapping with 'id' and 'op'; got "
+                             f"{short_repr(entry)}")
     id = entry.get("id")
     if not is_name(id):
         raise ChainFileError(
-            f"{where}: " + ("missing 'id'" if id is None else f"malformed id {id!r}")
+            f"{where}: " + ("missing 'id'" if id is None else f"malformed id {short_repr(id)}")
             + "; ids use letters, digits, '_' or '-' and do not start with a digit"
         )
     where = f"chain {name!r}, node {id!r}"
@@ -197,7 +198,8 @@ def _read_envelope(
                "program artifacts and the radarsnn command know the built-in ops only; "
                "docs/howto-op.md)" if isinstance(op_name, str) and is_name(op_name) else "")
         raise ChainFileError(
-            f"{where}: " + ("missing 'op'" if op_name is None else f"unknown op {op_name!r}")
+            f"{where}: "
+            + ("missing 'op'" if op_name is None else f"unknown op {short_repr(op_name)}")
             + f"; valid ops: {', '.join(sorted(registry))}{own}",
             node=id,
         )
@@ -209,11 +211,11 @@ def _read_envelope(
     else:
         inputs = entry.get("inputs", [])
         if not isinstance(inputs, list):
-            raise ChainFileError(f"{where}: 'inputs' must be a list of ids; got {inputs!r}",
-                                 node=id)
+            raise ChainFileError(f"{where}: 'inputs' must be a list of ids; got "
+                                 f"{short_repr(inputs)}", node=id)
     bad = [i for i in inputs if not is_name(i)]
     if bad:
-        raise ChainFileError(f"{where}: malformed input id {bad[0]!r}", node=id)
+        raise ChainFileError(f"{where}: malformed input id {short_repr(bad[0])}", node=id)
     params = {k: v for k, v in entry.items() if k not in _ENVELOPE}
     params["op"] = op_name
     return id, registry[op_name], tuple(inputs), params

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import tracemalloc
 from pathlib import Path
 
 import pytest
@@ -182,3 +183,37 @@ def test_files_are_named_in_errors(tmp_path: Path) -> None:
     g = Graph.from_yaml(CHAINS / "ti_range.yaml")
     good.write_text(g.to_json())
     assert Graph.from_json(good) == g
+
+
+# -- hostile input: huge values in messages, alias and nesting bombs ------------------------
+
+
+def _shared_tree(levels: int) -> list:
+    """A list whose full ``repr`` has 2**levels leaves, built from ``levels`` shared lists."""
+    tree: list = ["lol"]
+    for _ in range(levels):
+        tree = [tree, tree]
+    return tree
+
+
+@pytest.mark.parametrize("where", ["name", "id", "op", "input", "param"])
+def test_messages_quote_a_huge_value_in_bounded_size(where: str) -> None:
+    # 2**22 leaves: a full repr is 30 MB (2**62 leaves, from a 500-byte alias bomb, never ends)
+    bomb = _shared_tree(22)
+    node = {"id": "t", "op": "threshold", "input": "x", "value": 1.0}
+    data: dict = {"name": "c", "nodes": [node]}
+    if where == "name":
+        data["name"] = bomb
+    elif where == "param":
+        node["value"] = bomb
+    else:
+        node[where] = bomb
+    tracemalloc.start()
+    try:
+        with pytest.raises(ChainFileError) as info:
+            Graph.from_dict(data)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(str(info.value)) < 600 and "[[" in str(info.value)
+    assert peak < 4 << 20, f"{peak} bytes allocated to describe the value"

@@ -25,6 +25,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ir.errors import CompileError
+from ir.model import short_repr
 
 __all__ = ["BUDGETS", "BUILTIN_PROFILES", "HardwareProfile", "load_profile"]
 
@@ -179,6 +180,6 @@ def _from_text(text: str, label: str) -> HardwareProfile:
     try:  # model_validate: a non-string key is a field error, not a TypeError of **data
         return HardwareProfile.model_validate(data)
     except ValidationError as err:
-        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {e.get('input')!r}: {e['msg']}"
-                 for e in err.errors(include_url=False)]
+        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {short_repr(e.get('input'))}: "
+                 f"{e['msg']}" for e in err.errors(include_url=False)]
         raise CompileError(f"{label}: " + "; ".join(parts)) from err
