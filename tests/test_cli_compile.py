@@ -133,3 +133,14 @@ def test_program_artifacts_keep_the_axis_order(tmp_path):
     assert list(back.graph.infer_types()["adc"].axes) == ["rx", "chirp", "sample"]
     x = np.arange(64.0).reshape(2, 4, 8)
     np.testing.assert_array_equal(run_program(back, {"adc": x}).outputs["o"], x ** 2)
+
+
+def test_option_values_are_parsed_within_the_yaml_bounds(capsys, tmp_path):
+    bomb = "[&a [1, 1, 1, 1, 1, 1, 1, 1], " + ", ".join(
+        f"&{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]"
+        for p, c in zip("abcdefgh", "bcdefghi", strict=True)) + "]"
+    assert main(["compile", str(TI), "-o", str(tmp_path / "x"), "--option",
+                 f"fft_radices={bomb}"]) == 2
+    err = capsys.readouterr().err
+    assert "option 'fft_radices': line 1: the document has more than 524288 YAML nodes" in err
+    assert len(err) < 1000

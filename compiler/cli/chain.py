@@ -130,18 +130,23 @@ def parse_options(items: list[str] | None) -> dict:
     """
     import yaml
 
+    from ir.model import short_repr
+    from ir.parsing import load_yaml
+
     options = {}
     for item in items or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise RadarSNNError(f"option {item!r} is not KEY=VALUE (e.g. headroom=1.5)")
+            raise RadarSNNError(f"option {short_repr(item)} is not KEY=VALUE (e.g. headroom=1.5)")
         try:
-            options[key] = yaml.safe_load(value)
+            options[key] = load_yaml(value, error=RadarSNNError)
         except yaml.YAMLError as err:
             from ir.serialize import describe_yaml_error
 
-            raise RadarSNNError(f"option {key!r}: value {value!r} is not YAML "
-                                f"({describe_yaml_error(err)})") from None
+            raise RadarSNNError(f"option {short_repr(key)}: value {short_repr(value)} is not "
+                                f"YAML ({describe_yaml_error(err)})") from None
+        except RadarSNNError as err:
+            raise RadarSNNError(f"option {short_repr(key)}: {err}") from None
     return options
 
 

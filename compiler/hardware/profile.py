@@ -168,12 +168,16 @@ loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
 
 
 def _from_text(text: str, label: str) -> HardwareProfile:
-    try:
-        data: Any = yaml.safe_load(text)
+    from ir.parsing import load_yaml
+
+    try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
+        data: Any = load_yaml(text, error=CompileError)
     except yaml.YAMLError as err:
         from ir.serialize import describe_yaml_error
 
         raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
+    except CompileError as err:
+        raise CompileError(f"{label}: {err}") from err
     if not isinstance(data, dict):
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
