@@ -71,6 +71,7 @@ from backends.artifact_codec import network_from_manifest, population_entry, pro
 from backends.artifact_io import (
     ARRAYS_FILE,
     MANIFEST_FILE,
+    MAX_ARRAYS_BYTES,
     finite_json,
     npz_bytes,
     plain_json,
@@ -226,7 +227,7 @@ def _read_arrays(path: Path, manifest: dict) -> dict[str, np.ndarray]:
     if not isinstance(spec, dict) or spec.get("file") != ARRAYS_FILE:
         raise ArtifactError(f"{path.with_name(MANIFEST_FILE)}: the 'arrays' entry must name "
                             f"{ARRAYS_FILE!r}, got {short_repr(spec)}")
-    raw = read_bytes(path)
+    raw = read_bytes(path, limit=MAX_ARRAYS_BYTES)
     digest = sha256_hex(raw)
     if digest != spec.get("sha256") or len(raw) != spec.get("n_bytes"):
         raise ArtifactError(f"{path}: {len(raw)} bytes with SHA-256 {digest}, but the manifest "

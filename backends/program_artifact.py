@@ -44,6 +44,7 @@ from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, se
 from compiler.program import CompiledProgram, Segment
 from ir import Graph
 from ir.errors import ArtifactError, RadarSNNError
+from ir.parsing import load_json
 
 __all__ = ["PROGRAM_FILE", "PROGRAM_FORMAT", "PROGRAM_VERSION", "is_program", "load_program",
            "read_program_manifest", "save_program"]
@@ -165,6 +166,21 @@ def _network_dir(folder: Path, ref: str, path: Path) -> Path:
     return net_dir
 
 
+def _json_field(manifest: dict, key: str, path: Path) -> object:
+    """A field of ``program.json`` that holds JSON text, parsed within :mod:`ir.parsing`'s
+    bounds (nesting depth)."""
+    text = manifest[key]
+    if not isinstance(text, str):
+        raise ArtifactError(f"{path}: field {key!r} must hold JSON text; got "
+                            f"{type(text).__name__}")
+    try:
+        return load_json(text, error=ArtifactError)
+    except json.JSONDecodeError as exc:
+        raise ArtifactError(f"{path}: field {key!r} is not valid JSON ({exc})") from exc
+    except ArtifactError as exc:
+        raise ArtifactError(f"{path}: field {key!r}: {exc}") from exc
+
+
 def read_program_manifest(directory: str | Path) -> dict:
     """The checked ``program.json`` of a program artifact (format, version, canonical, digest)."""
     return read_manifest_file(Path(directory) / PROGRAM_FILE, fmt=PROGRAM_FORMAT,
@@ -196,7 +212,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
     manifest = read_program_manifest(folder)
     path = folder / PROGRAM_FILE
     try:
-        graph = Graph.from_dict(json.loads(manifest["graph"]))
+        graph = Graph.from_dict(_json_field(manifest, "graph", path))
         graph.verify()
         segments = []
         for entry in manifest["segments"]:
@@ -216,7 +232,8 @@ def load_program(directory: str | Path) -> CompiledProgram:
         target = manifest["target"]
         profile = None if target is None else HardwareProfile.model_validate(target)
         report = manifest["report"]
-        records = {} if report is None else {"report": Report(json.loads(report))}
+        records = {} if report is None else {"report": Report(_json_field(manifest, "report",
+                                                                           path))}
         program = CompiledProgram(graph=graph, segments=segments,
                                   options=dict(manifest["options"]), records=records,
                                   target=profile)

@@ -144,3 +144,22 @@ def test_option_values_are_parsed_within_the_yaml_bounds(capsys, tmp_path):
     err = capsys.readouterr().err
     assert "option 'fft_radices': line 1: the document has more than 524288 YAML nodes" in err
     assert len(err) < 1000
+
+
+@pytest.mark.parametrize("field", ["graph", "report"])
+def test_deeply_nested_json_fields_of_a_program_are_refused(compiled, tmp_path, field):
+    import shutil
+
+    from backends.artifact_io import render_json
+    from backends.manifest import seal
+
+    copy = tmp_path / "copy"
+    shutil.copytree(compiled, copy)
+    path = copy / "program.json"
+    manifest = json.loads(path.read_text())
+    manifest[field] = "[" * 5000 + "]" * 5000
+    del manifest["manifest_sha256"]
+    path.write_bytes(render_json(seal(manifest)))  # re-signed: the parser must catch it
+    with pytest.raises(ArtifactError, match=rf"program\.json: field '{field}': line 1: nested "
+                                            "deeper than 64 levels"):
+        load(copy)
