@@ -163,3 +163,21 @@ def test_deeply_nested_json_fields_of_a_program_are_refused(compiled, tmp_path, 
     with pytest.raises(ArtifactError, match=rf"program\.json: field '{field}': line 1: nested "
                                             "deeper than 64 levels"):
         load(copy)
+
+
+def test_npy_inputs_declaring_more_than_the_limit_are_refused_unread(tmp_path):
+    from compiler.cli.chain import load_arrays
+    from ir.errors import RadarSNNError
+
+    header = repr({"descr": "<f8", "fortran_order": False, "shape": ((1 << 29) + 1,)}).encode()
+    header += b" " * (63 - (len(header) + 10) % 64) + b"\n"
+    head = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header
+    sparse = tmp_path / "x.npy"  # 4 GiB + 8 bytes of (sparse) data: all there
+    with sparse.open("wb") as f:
+        f.write(head)
+        f.truncate(len(head) + (4 << 30) + 8)
+    with pytest.raises(RadarSNNError, match=r"\(4294967304 bytes\), over the limit of "
+                                            r"4294967296 bytes \(MAX_NPY_BYTES\)"):
+        load_arrays([str(sparse)], ["x"], "chain")
+    with pytest.raises(RadarSNNError, match="not a regular file"):
+        load_arrays(["/dev/zero"], ["x"], "chain")

@@ -14,7 +14,11 @@ from pathlib import Path
 
 from ir.errors import RadarSNNError
 
-__all__ = ["add_parsers", "load_arrays", "parse_options", "read_npy"]
+__all__ = ["MAX_NPY_BYTES", "add_parsers", "load_arrays", "parse_options", "read_npy"]
+
+#: Largest array a ``.npy`` input may declare: 4 GiB (the artifacts' array limit; a bigger
+#: input could not be simulated within the default memory limit anyway).
+MAX_NPY_BYTES = 4 << 30
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -75,15 +79,19 @@ def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
 def read_npy(path: str, what: str):
     """One array from a ``.npy`` file, never unpickling; ``what`` names it in errors.
 
-    The header is read first: object dtypes are refused and the data it declares
-    must be in the file, so a damaged header cannot make numpy allocate or parse
-    beyond the file.
+    The header is read first: object dtypes are refused, the data it declares must be
+    at most :data:`MAX_NPY_BYTES` and in the file, so a damaged or forged header cannot
+    make numpy allocate or parse beyond the file (a sparse file declaring 10¹² values
+    included).
 
     Raises
     ------
     RadarSNNError
-        Missing, empty, truncated or damaged files, object arrays, ``.npz`` archives.
+        Missing, empty, truncated or damaged files, not a regular file, object arrays,
+        a declared size over :data:`MAX_NPY_BYTES`, ``.npz`` archives.
     """
+    import os
+    import stat
     import tokenize
 
     import numpy as np
@@ -93,6 +101,8 @@ def read_npy(path: str, what: str):
                 MemoryError, TypeError)
     try:
         with open(path, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):  # /dev/zero, a FIFO, a tty
+                raise RadarSNNError(f"cannot read {what}: not a regular file")
             if f.read(4) == b"PK\x03\x04":
                 raise RadarSNNError(f"cannot read {what}: it is a .npz archive; give one array "
                                     "per .npy file (np.save)")
@@ -105,6 +115,10 @@ def read_npy(path: str, what: str):
                                     "them would unpickle code); save a numeric array")
             need = int(np.prod(shape, dtype=object)) * dtype.itemsize
             have = _remaining(f)
+            if need > MAX_NPY_BYTES:
+                raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
+                                    f"({need} bytes), over the limit of {MAX_NPY_BYTES} bytes "
+                                    "(MAX_NPY_BYTES); give fewer frames per file")
             if have < need:
                 raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
                                     f"({need} bytes) but the file holds {have}; truncated?")
