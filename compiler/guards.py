@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
-from ir.model import short_repr
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -145,7 +144,8 @@ def limits_from_options(options: Mapping[str, object] | None) -> tuple[int | Non
     Raises
     ------
     CompileError
-        A limit that is not a positive number or None, naming the option.
+        A limit that is not a positive finite number or None (NaN would switch the guard
+        off), naming the option and the value.
 
     Examples
     --------
@@ -154,19 +154,16 @@ def limits_from_options(options: Mapping[str, object] | None) -> tuple[int | Non
     >>> limits_from_options({"max_memory_bytes": -1})
     Traceback (most recent call last):
     ...
-    ir.errors.CompileError: compile option max_memory_bytes=-1 must be a positive number of \
-bytes or None (no limit)
+    ir.errors.CompileError: compile option: max_memory_bytes=-1 must be a positive finite number \
+of bytes, or None (no limit)
     """
+    from backends.reference.guards import check_limit
+
     options = options or {}
-    memory = options.get("max_memory_bytes", MAX_MEMORY_BYTES)
-    time_s = options.get("max_time_s", MAX_TIME_S)
-    for name, value, unit in (("max_memory_bytes", memory, "bytes"), ("max_time_s", time_s, "s")):
-        ok = value is None or (isinstance(value, int | float) and not isinstance(value, bool)
-                               and value > 0 and value == value)
-        if not ok:
-            raise CompileError(f"compile option {name}={short_repr(value)} must be a positive "
-                               f"number of {unit} or None (no limit)")
-    return (None if memory is None else int(memory)), (None if time_s is None else float(time_s))
+    return (check_limit("max_memory_bytes", options.get("max_memory_bytes", MAX_MEMORY_BYTES),
+                        "bytes", where="compile option", error=CompileError),
+            check_limit("max_time_s", options.get("max_time_s", MAX_TIME_S), "s",
+                        where="compile option", error=CompileError))
 
 
 def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYTES,
@@ -190,11 +187,17 @@ def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYT
     ------
     BudgetError
         Over a limit, naming the largest node, the estimate, the limit and the fixes.
+    CompileError
+        A limit that is not a positive finite number or None.
     IRError
         If the graph's types cannot be inferred.
     """
-    from backends.reference.guards import human_bytes
+    from backends.reference.guards import check_limit, human_bytes
 
+    max_memory_bytes = check_limit("max_memory_bytes", max_memory_bytes, "bytes",
+                                   where=f"chain {graph.name!r}", error=CompileError)
+    max_time_s = check_limit("max_time_s", max_time_s, "s", where=f"chain {graph.name!r}",
+                             error=CompileError)
     est = estimate_compile(graph)
     node = est.largest
     if node is None:
