@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
+from ir.evaluate import check_value_sizes
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -97,10 +98,6 @@ def _parts(t: TensorType) -> int:
     return 2 if t.domain in ("amplitude", "db") else 1
 
 
-def _element_bytes(t: TensorType) -> int:
-    return 1 if t.domain == "mask" else 16 if t.complex else 8
-
-
 def estimate_compile(graph: Graph) -> CompileEstimate:
     """Estimate memory and time of compiling ``graph`` (see the module for the model).
 
@@ -124,7 +121,7 @@ def estimate_compile(graph: Graph) -> CompileEstimate:
     for node, t in types.items():
         op = graph.op(node)
         neurons = t.size * _parts(t)
-        total = 2 * t.size * _element_bytes(t) + NEURON_BYTES * neurons
+        total = 2 * t.nbytes + NEURON_BYTES * neurons
         time_s += NEURON_S * neurons
         if op.op in _WEIGHT_OPS:
             src = types[graph.inputs_of(node)[0]]
@@ -202,6 +199,9 @@ def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYT
     node = est.largest
     if node is None:
         return est
+    # whatever the limits: a value no array can hold (an n_fft of 2**63) is never compiled
+    check_value_sizes(graph, graph.infer_types(), graph, max_memory_bytes=None,
+                      error=BudgetError)
     t = graph.infer_types()[node]
     what = (f"node {node!r} ({graph.op(node).op}) at {human_bytes(est.per_node[node])}: a "
             f"{dict(t.axes)} {'complex' if t.complex else 'real'} value")

@@ -118,6 +118,18 @@ class TensorType(IRModel):
             total *= n
         return total
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of a numpy array of this type: 16 per complex element, 8 per real one, 1 per
+        mask element (a Python int: a declared size need not fit in 64 bits).
+
+        Examples
+        --------
+        >>> TensorType(axes={"a": 3}, complex=True).nbytes, TensorType(axes={"a": 2**62}).nbytes
+        (48, 36893488147419103232)
+        """
+        return self.size * (1 if self.domain == "mask" else 16 if self.complex else 8)
+
     def index(self, axis: str) -> int:
         """Dimension index of ``axis``.
 

@@ -33,7 +33,7 @@ from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.evaluate import check_input, eval_registry, evaluate_node
+from ir.evaluate import check_input, check_value_sizes, eval_registry, evaluate_node
 from ir.model import short_repr
 
 __all__ = ["ProgramResult", "check_program", "program_plans", "run_program"]
@@ -259,6 +259,10 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         raise SimulationError(f"program {graph.name!r}: inputs {sorted(inputs)} do not match the "
                               f"graph's input nodes {sorted(expected)} (missing "
                               f"{sorted(missing)}, unknown {sorted(extra)})")
+    # every node's value is kept: refuse what cannot fit before the first is allocated
+    check_value_sizes(graph, types, types, max_memory_bytes=check_limit(
+        "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
+        doing="running the program")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
     impls = eval_registry(program.evaluators)
     decoded: set[str] = set()  # nodes whose value went through a spiking segment's decoder
