@@ -44,6 +44,7 @@ from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, se
 from compiler.program import CompiledProgram, Segment
 from ir import Graph
 from ir.errors import ArtifactError, RadarSNNError
+from ir.model import short_repr
 from ir.parsing import load_json
 
 __all__ = ["PROGRAM_FILE", "PROGRAM_FORMAT", "PROGRAM_VERSION", "is_program", "load_program",
@@ -155,14 +156,21 @@ def _network_dir(folder: Path, ref: str, path: Path) -> Path:
     could point outside the artifact, so it is refused, as is a path that leaves it.
     """
     networks = folder / "networks"
-    net_dir = folder / str(ref)
-    for part in (networks, net_dir):
-        if part.is_symlink():
-            raise ArtifactError(f"{path}: {part} is a symbolic link; a program artifact's "
-                                "networks/ must be real folders inside it (re-save the program)")
-    if net_dir.resolve().parent != networks.resolve() or \
-            not networks.resolve().is_relative_to(folder.resolve()):
-        raise ArtifactError(f"{path}: network path {ref!r} leaves the artifact's networks/ folder")
+    try:
+        net_dir = folder / str(ref)
+        for part in (networks, net_dir):
+            if part.is_symlink():
+                raise ArtifactError(f"{path}: {part} is a symbolic link; a program artifact's "
+                                    "networks/ must be real folders inside it (re-save the "
+                                    "program)")
+        inside = (net_dir.resolve().parent == networks.resolve()
+                  and networks.resolve().is_relative_to(folder.resolve()))
+    except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+        raise ArtifactError(f"{path}: network path {short_repr(ref)} cannot be used "
+                            f"({getattr(exc, 'strerror', None) or exc})") from exc
+    if not inside:
+        raise ArtifactError(f"{path}: network path {short_repr(ref)} leaves the artifact's "
+                            "networks/ folder")
     return net_dir
 
 

@@ -181,3 +181,22 @@ def test_npy_inputs_declaring_more_than_the_limit_are_refused_unread(tmp_path):
         load_arrays([str(sparse)], ["x"], "chain")
     with pytest.raises(RadarSNNError, match="not a regular file"):
         load_arrays(["/dev/zero"], ["x"], "chain")
+
+
+@pytest.mark.parametrize("ref", ["x" * 300, "networks/a\x00b"])
+def test_a_network_path_the_file_system_refuses_is_an_artifact_error(compiled, tmp_path, ref):
+    import shutil
+
+    from backends.artifact_io import render_json
+    from backends.manifest import seal
+
+    copy = tmp_path / "copy"
+    shutil.copytree(compiled, copy)
+    path = copy / "program.json"
+    manifest = json.loads(path.read_text())
+    spiking = next(s for s in manifest["segments"] if s["kind"] == "spiking")
+    spiking["network"]["path"] = ref  # OSError: File name too long / ValueError: NUL byte
+    del manifest["manifest_sha256"]
+    path.write_bytes(render_json(seal(manifest)))
+    with pytest.raises(ArtifactError, match=r"program\.json: network path '.*' cannot be used"):
+        load(copy)
