@@ -72,6 +72,7 @@ from backends.artifact_io import (
     ARRAYS_FILE,
     ARTIFACT_ENTRIES,
     MANIFEST_FILE,
+    MAX_ARRAYS_BYTES,
     finite_json,
     npz_bytes,
     plain_json,
@@ -88,6 +89,7 @@ from compiler.snn import (
     StencilProjection,
 )
 from ir.errors import ArtifactError, NetworkError
+from ir.model import short_repr
 
 __all__ = [
     "ARTIFACT_FORMAT",
@@ -260,8 +262,8 @@ def _read_arrays(path: Path, manifest: dict) -> dict[str, np.ndarray]:
     spec = manifest.get("arrays")
     if not isinstance(spec, dict) or spec.get("file") != ARRAYS_FILE:
         raise ArtifactError(f"{path.with_name(MANIFEST_FILE)}: the 'arrays' entry must name "
-                            f"{ARRAYS_FILE!r}, got {spec!r}")
-    raw = read_bytes(path)
+                            f"{ARRAYS_FILE!r}, got {short_repr(spec)}")
+    raw = read_bytes(path, limit=MAX_ARRAYS_BYTES)
     digest = sha256_hex(raw)
     if digest != spec.get("sha256") or len(raw) != spec.get("n_bytes"):
         raise ArtifactError(f"{path}: {len(raw)} bytes with SHA-256 {digest}, but the manifest "
@@ -320,8 +322,8 @@ def load(directory: str | Path, *, kinds: Mapping[str, type] = PROJECTION_KINDS
     try:
         return network_from_manifest(manifest, arrays, kinds, path).validate()
     except ValidationError as exc:
-        errors = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']} (got {e['input']!r})"
-                           for e in exc.errors())
+        errors = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']} "
+                           f"(got {short_repr(e['input'])})" for e in exc.errors())
         raise ArtifactError(f"{path}: a {exc.title} entry does not parse: {errors}") from exc
     except NetworkError as exc:
         raise ArtifactError(f"{path}: the stored network is invalid: {exc}", node=exc.node) from exc

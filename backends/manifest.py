@@ -12,16 +12,27 @@ refuses anything that is not exactly what the writer produced.
 from __future__ import annotations
 
 import json
+import re
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from backends.artifact_io import canonical_json, read_bytes, render_json, sha256_hex
+from backends.artifact_io import (
+    MAX_MANIFEST_BYTES,
+    canonical_json,
+    read_bytes,
+    render_json,
+    sha256_hex,
+)
 from ir.errors import ArtifactError
+from ir.model import short_repr
+from ir.parsing import load_json
 
 __all__ = ["HASH_KEY", "radarsnn_version", "read_manifest_file", "seal"]
 
 #: The manifest field holding the digest of the others.
 HASH_KEY = "manifest_sha256"
+
+_VERSION = re.compile(r"[0-9]{1,9}\.[0-9]{1,9}")
 
 
 def radarsnn_version() -> str:
@@ -81,21 +92,25 @@ def read_manifest_file(path: Path, *, fmt: str, current: str, what: str, redo: s
     ...     read_manifest_file(path, fmt="x", current="1.2", what="x file", redo="redo")["format"]
     'x'
     """
-    raw = read_bytes(path)
-    try:
-        manifest = json.loads(raw.decode("utf-8"))
+    raw = read_bytes(path, limit=MAX_MANIFEST_BYTES)
+    try:  # bounded nesting (ir.parsing): a forged manifest of 5 000 '[' is not a RecursionError
+        manifest = load_json(raw.decode("utf-8"), error=ArtifactError)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ArtifactError(f"{path}: not valid UTF-8 JSON ({exc})") from exc
+    except ArtifactError as exc:
+        raise ArtifactError(f"{path}: {exc}") from exc
     if not isinstance(manifest, dict):
         raise ArtifactError(f"{path}: the top level is a {type(manifest).__name__}, not an object")
     found = manifest.get("format")
     if found != fmt:
-        raise ArtifactError(f"{path}: format is {found!r}, expected {fmt!r}; not a {what}")
+        raise ArtifactError(f"{path}: format is {short_repr(found)}, expected {fmt!r}; not a "
+                            f"{what}")
     text = manifest.get("format_version")
-    parts = text.split(".") if isinstance(text, str) else []
-    if len(parts) != 2 or not all(p.isdigit() for p in parts):
-        raise ArtifactError(f"{path}: format_version {text!r} is not MAJOR.MINOR")
-    major, ours = int(parts[0]), int(current.split(".")[0])
+    # ASCII digits only: str.isdigit() accepts '²' and int() then fails; at most 9 of them
+    if not (isinstance(text, str) and _VERSION.fullmatch(text)):
+        raise ArtifactError(f"{path}: format_version {short_repr(text)} is not MAJOR.MINOR "
+                            "(digits 0-9)")
+    major, ours = int(text.split(".")[0]), int(current.split(".")[0])
     if major > ours:
         raise ArtifactError(
             f"{path}: written by radarsnn {manifest.get('radarsnn_version')}, format {text}; "

@@ -44,6 +44,8 @@ from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, se
 from compiler.program import CompiledProgram, Segment
 from ir import Graph
 from ir.errors import ArtifactError, RadarSNNError
+from ir.model import short_repr
+from ir.parsing import load_json
 
 __all__ = ["PROGRAM_FILE", "PROGRAM_FORMAT", "PROGRAM_VERSION", "is_program", "load_program",
            "read_program_manifest", "save_program"]
@@ -166,15 +168,37 @@ def _network_dir(folder: Path, ref: str, path: Path) -> Path:
     could point outside the artifact, so it is refused, as is a path that leaves it.
     """
     networks = folder / "networks"
-    net_dir = folder / str(ref)
-    for part in (networks, net_dir):
-        if part.is_symlink():
-            raise ArtifactError(f"{path}: {part} is a symbolic link; a program artifact's "
-                                "networks/ must be real folders inside it (re-save the program)")
-    if net_dir.resolve().parent != networks.resolve() or \
-            not networks.resolve().is_relative_to(folder.resolve()):
-        raise ArtifactError(f"{path}: network path {ref!r} leaves the artifact's networks/ folder")
+    try:
+        net_dir = folder / str(ref)
+        for part in (networks, net_dir):
+            if part.is_symlink():
+                raise ArtifactError(f"{path}: {part} is a symbolic link; a program artifact's "
+                                    "networks/ must be real folders inside it (re-save the "
+                                    "program)")
+        inside = (net_dir.resolve().parent == networks.resolve()
+                  and networks.resolve().is_relative_to(folder.resolve()))
+    except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+        raise ArtifactError(f"{path}: network path {short_repr(ref)} cannot be used "
+                            f"({getattr(exc, 'strerror', None) or exc})") from exc
+    if not inside:
+        raise ArtifactError(f"{path}: network path {short_repr(ref)} leaves the artifact's "
+                            "networks/ folder")
     return net_dir
+
+
+def _json_field(manifest: dict, key: str, path: Path) -> object:
+    """A field of ``program.json`` that holds JSON text, parsed within :mod:`ir.parsing`'s
+    bounds (nesting depth)."""
+    text = manifest[key]
+    if not isinstance(text, str):
+        raise ArtifactError(f"{path}: field {key!r} must hold JSON text; got "
+                            f"{type(text).__name__}")
+    try:
+        return load_json(text, error=ArtifactError)
+    except json.JSONDecodeError as exc:
+        raise ArtifactError(f"{path}: field {key!r} is not valid JSON ({exc})") from exc
+    except ArtifactError as exc:
+        raise ArtifactError(f"{path}: field {key!r}: {exc}") from exc
 
 
 def read_program_manifest(directory: str | Path) -> dict:
@@ -208,7 +232,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
     manifest = read_program_manifest(folder)
     path = folder / PROGRAM_FILE
     try:
-        graph = Graph.from_dict(json.loads(manifest["graph"]))
+        graph = Graph.from_dict(_json_field(manifest, "graph", path))
         graph.verify()
         segments = []
         for entry in manifest["segments"]:
@@ -228,7 +252,8 @@ def load_program(directory: str | Path) -> CompiledProgram:
         target = manifest["target"]
         profile = None if target is None else HardwareProfile.model_validate(target)
         report = manifest["report"]
-        records = {} if report is None else {"report": Report(json.loads(report))}
+        records = {} if report is None else {"report": Report(_json_field(manifest, "report",
+                                                                           path))}
         program = CompiledProgram(graph=graph, segments=segments,
                                   options=dict(manifest["options"]), records=records,
                                   target=profile)

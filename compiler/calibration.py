@@ -36,7 +36,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ir.errors import CompileError
+from ir.errors import BudgetError, CompileError
+from ir.evaluate import MAX_VALUE_BYTES, check_value_sizes
 
 __all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy", "SYNTHETIC",
            "synthetic_inputs"]
@@ -245,8 +246,8 @@ SYNTHETIC: dict[str, Callable[[np.random.Generator, tuple[int, ...], bool], np.n
 
 
 def synthetic_inputs(graph, *, seed: int = 0,
-                     generators: Mapping[str, Callable[..., np.ndarray]] = SYNTHETIC
-                     ) -> dict[str, np.ndarray]:
+                     generators: Mapping[str, Callable[..., np.ndarray]] = SYNTHETIC,
+                     max_memory_bytes: int | None = MAX_VALUE_BYTES) -> dict[str, np.ndarray]:
     r"""Seeded noise for every input node of ``graph``, drawn in the input's domain.
 
     A stand-in calibration set for when only the *cost* of a chain matters
@@ -270,6 +271,9 @@ def synthetic_inputs(graph, *, seed: int = 0,
         Seed of ``numpy.random.default_rng``.
     generators : mapping of domain to callable
         ``draw(rng, shape, complex) -> ndarray`` per domain (default :data:`SYNTHETIC`).
+    max_memory_bytes : int or None
+        Limit on the bytes of the inputs drawn, checked from their types first (default
+        :data:`ir.evaluate.MAX_VALUE_BYTES`; ``None``: no limit).
 
     Returns
     -------
@@ -281,6 +285,9 @@ def synthetic_inputs(graph, *, seed: int = 0,
     CompileError
         For an input whose domain has no generator (naming the node and the
         domain, and suggesting ``--calibration``).
+    BudgetError
+        If the inputs would take more than ``max_memory_bytes`` (an axis of 2**62),
+        naming the largest.
 
     Examples
     --------
@@ -296,6 +303,8 @@ def synthetic_inputs(graph, *, seed: int = 0,
     """
     rng = np.random.default_rng(seed)
     types = graph.infer_types()
+    check_value_sizes(graph, types, graph.input_ids(), max_memory_bytes=max_memory_bytes,
+                      error=BudgetError, doing="drawing synthetic calibration inputs")
     out = {}
     for node in graph.input_ids():
         t = types[node]

@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
+from ir.evaluate import check_value_sizes
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -97,10 +98,6 @@ def _parts(t: TensorType) -> int:
     return 2 if t.domain in ("amplitude", "db") else 1
 
 
-def _element_bytes(t: TensorType) -> int:
-    return 1 if t.domain == "mask" else 16 if t.complex else 8
-
-
 def estimate_compile(graph: Graph) -> CompileEstimate:
     """Estimate memory and time of compiling ``graph`` (see the module for the model).
 
@@ -124,7 +121,7 @@ def estimate_compile(graph: Graph) -> CompileEstimate:
     for node, t in types.items():
         op = graph.op(node)
         neurons = t.size * _parts(t)
-        total = 2 * t.size * _element_bytes(t) + NEURON_BYTES * neurons
+        total = 2 * t.nbytes + NEURON_BYTES * neurons
         time_s += NEURON_S * neurons
         if op.op in _WEIGHT_OPS:
             src = types[graph.inputs_of(node)[0]]
@@ -144,7 +141,8 @@ def limits_from_options(options: Mapping[str, object] | None) -> tuple[int | Non
     Raises
     ------
     CompileError
-        A limit that is not a positive number or None, naming the option.
+        A limit that is not a positive finite number or None (NaN would switch the guard
+        off), naming the option and the value.
 
     Examples
     --------
@@ -153,19 +151,16 @@ def limits_from_options(options: Mapping[str, object] | None) -> tuple[int | Non
     >>> limits_from_options({"max_memory_bytes": -1})
     Traceback (most recent call last):
     ...
-    ir.errors.CompileError: compile option max_memory_bytes=-1 must be a positive number of \
-bytes or None (no limit)
+    ir.errors.CompileError: compile option: max_memory_bytes=-1 must be a positive finite number \
+of bytes, or None (no limit)
     """
+    from backends.reference.guards import check_limit
+
     options = options or {}
-    memory = options.get("max_memory_bytes", MAX_MEMORY_BYTES)
-    time_s = options.get("max_time_s", MAX_TIME_S)
-    for name, value, unit in (("max_memory_bytes", memory, "bytes"), ("max_time_s", time_s, "s")):
-        ok = value is None or (isinstance(value, int | float) and not isinstance(value, bool)
-                               and value > 0 and value == value)
-        if not ok:
-            raise CompileError(f"compile option {name}={value!r} must be a positive number of "
-                               f"{unit} or None (no limit)")
-    return (None if memory is None else int(memory)), (None if time_s is None else float(time_s))
+    return (check_limit("max_memory_bytes", options.get("max_memory_bytes", MAX_MEMORY_BYTES),
+                        "bytes", where="compile option", error=CompileError),
+            check_limit("max_time_s", options.get("max_time_s", MAX_TIME_S), "s",
+                        where="compile option", error=CompileError))
 
 
 def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYTES,
@@ -189,15 +184,24 @@ def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYT
     ------
     BudgetError
         Over a limit, naming the largest node, the estimate, the limit and the fixes.
+    CompileError
+        A limit that is not a positive finite number or None.
     IRError
         If the graph's types cannot be inferred.
     """
-    from backends.reference.guards import human_bytes
+    from backends.reference.guards import check_limit, human_bytes
 
+    max_memory_bytes = check_limit("max_memory_bytes", max_memory_bytes, "bytes",
+                                   where=f"chain {graph.name!r}", error=CompileError)
+    max_time_s = check_limit("max_time_s", max_time_s, "s", where=f"chain {graph.name!r}",
+                             error=CompileError)
     est = estimate_compile(graph)
     node = est.largest
     if node is None:
         return est
+    # whatever the limits: a value no array can hold (an n_fft of 2**63) is never compiled
+    check_value_sizes(graph, graph.infer_types(), graph, max_memory_bytes=None,
+                      error=BudgetError)
     t = graph.infer_types()[node]
     what = (f"node {node!r} ({graph.op(node).op}) at {human_bytes(est.per_node[node])}: a "
             f"{dict(t.axes)} {'complex' if t.complex else 'real'} value")

@@ -25,6 +25,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from ir.errors import CompileError
+from ir.model import short_repr
 
 __all__ = ["OPTION_CHECKS", "check_options"]
 
@@ -113,6 +114,6 @@ def check_options(options: Mapping[str, Any] | None, **named: Any) -> dict[str, 
             continue
         ok, what = rule
         if not ok(value):
-            raise CompileError(f"compile option {name}={value!r} must be {what}")
+            raise CompileError(f"compile option {name}={short_repr(value)} must be {what}")
     return {k: v for k, v in dict(options or {}).items()
             if not (v is None and k in OPTION_CHECKS)}

@@ -23,7 +23,8 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import sys
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -35,13 +36,71 @@ from ir.ops import (
 )
 from ir.types import TensorType
 
-__all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "eval_registry",
-           "evaluate", "evaluate_node"]
+__all__ = ["EVAL_REGISTRY", "MAX_VALUE_BYTES", "EvalRegistry", "Implementation", "check_input",
+           "check_value_sizes", "eval_registry", "evaluate", "evaluate_node"]
+
+#: Default limit on the values :func:`evaluate` holds (it keeps every node's value): 8 GiB,
+#: like the compile and simulation guards.
+MAX_VALUE_BYTES = 8 << 30
 
 
+def check_value_sizes(graph: Graph, types: Mapping[str, TensorType], nodes: Iterable[str], *,
+                      max_memory_bytes: int | None, error: type[RadarSNNError] = IRError,
+                      doing: str = "evaluating") -> int:
+    """Refuse before anything is allocated when the values of ``nodes`` would not fit.
 
+    The sizes come from the inferred types alone (:attr:`TensorType.nbytes`), so a chain
+    whose ``n_fft`` is ``2**63`` or whose axis is ``2**62`` long is refused here, naming
+    the largest node, instead of failing inside numpy.
 
+    Parameters
+    ----------
+    graph : Graph
+        The chain (for its name and the nodes' ops).
+    types : mapping of str to TensorType
+        Its inferred types.
+    nodes : iterable of str
+        The nodes whose values are held together.
+    max_memory_bytes : int or None
+        The limit (``None``: no limit).
+    error : type of RadarSNNError
+        Raised over the limit (:class:`~ir.errors.IRError` by default).
+    doing : str
+        What needs the values, for the message.
 
+    Returns
+    -------
+    int
+        The values' total size in bytes.
+
+    Examples
+    --------
+    >>> g = Graph.from_dict({"nodes": [{"id": "x", "op": "input", "shape": {"a": 2**40}},
+    ...                                {"id": "o", "op": "output", "input": "x"}]})
+    >>> check_value_sizes(g, g.infer_types(), ["x"], max_memory_bytes=8 << 30)
+    Traceback (most recent call last):
+    ...
+    ir.errors.IRError: graph 'chain': evaluating needs 8.8e+12 bytes for the values (over \
+max_memory_bytes=8589934592); the largest is node 'x' (input), a {'a': 1099511627776} real \
+value of 8.8e+12 bytes; shrink its axes (or n_fft) or raise max_memory_bytes
+    """
+    sizes = {n: types[n].nbytes for n in nodes}
+    total = sum(sizes.values())
+    node = max(sizes, key=sizes.__getitem__, default=None)
+    if node is None:
+        return total
+    t = types[node]
+    if sizes[node] > sys.maxsize:  # whatever the limit: numpy cannot index it
+        raise error(f"graph {graph.name!r}: node {node!r} ({graph.op(node).op}) is a "
+                    f"{dict(t.axes)} value of {sizes[node]:.2g} bytes, more than any array can "
+                    f"hold ({sys.maxsize} bytes); shrink its axes (or n_fft)", node=node)
+    if max_memory_bytes is None or total <= max_memory_bytes:
+        return total
+    raise error(f"graph {graph.name!r}: {doing} needs {total:.2g} bytes for the values (over "
+                f"max_memory_bytes={max_memory_bytes}); the largest is node {node!r} "
+                f"({graph.op(node).op}), a {dict(t.axes)} {'complex' if t.complex else 'real'} "
+                f"value of {sizes[node]:.2g} bytes; shrink its axes (or n_fft) or raise "
+                "max_memory_bytes", node=node)
 
 
 def evaluate(
@@ -49,6 +108,7 @@ def evaluate(
     inputs: Mapping[str, object],
     *,
     registry: EvalRegistry | None = None,
+    max_memory_bytes: int | None = MAX_VALUE_BYTES,
 ) -> dict[str, np.ndarray]:
     """Evaluate every node of a verified graph on the given input arrays.
 
@@ -62,6 +122,9 @@ def evaluate(
         ``mask`` inputs, non-negative for ``power`` inputs, all finite.
     registry : mapping of op class to implementation, optional
         Implementations that extend or override :data:`EVAL_REGISTRY`.
+    max_memory_bytes : int or None
+        Limit on the bytes of all the values together, from the types, checked before
+        anything is evaluated (default :data:`MAX_VALUE_BYTES`; ``None``: no limit).
 
     Returns
     -------
@@ -76,7 +139,8 @@ def evaluate(
         has the wrong shape, dtype or non-finite values (naming the input node), an
         op has no implementation, an implementation fails or returns an array that
         does not match the node's type (naming the node), or the graph holds an
-        opaque ``classifier`` (no layers) or one whose weights file is missing.
+        opaque ``classifier`` (no layers) or one whose weights file is missing, or the
+        values would take more than ``max_memory_bytes`` (naming the largest node).
 
     Examples
     --------
@@ -101,6 +165,7 @@ which are not graph inputs (inputs: ['x'])
     graph.verify()
     types = graph.infer_types()
     _check_input_names(graph, inputs)
+    check_value_sizes(graph, types, types, max_memory_bytes=max_memory_bytes)
     values: dict[str, np.ndarray] = {}
     for node_id, out_type in types.items():
         op = graph.op(node_id)

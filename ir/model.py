@@ -22,13 +22,15 @@ Point: field 'x': Input should be a valid integer, unable to parse string as an 
 from __future__ import annotations
 
 import re
+import reprlib
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, StringConstraints, ValidationError
 
 from ir.errors import IRError
 
-__all__ = ["NAME_PATTERN", "IRModel", "Name", "describe_validation_error", "is_name"]
+__all__ = ["NAME_PATTERN", "IRModel", "Name", "describe_validation_error", "is_name",
+           "short_repr"]
 
 NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_\-]*$"
 """Node ids and axis names: a letter or ``_``, then letters, digits, ``_`` or ``-``."""
@@ -76,7 +78,7 @@ def describe_validation_error(err: ValidationError) -> str:
         if loc in parts or any(o[: len(loc)] == loc and len(o) > len(loc) for o in locs):
             continue
         reason = item["msg"].removeprefix("Value error, ")
-        got = "" if item["type"] == "missing" else f" (got {_short(item.get('input'))})"
+        got = "" if item["type"] == "missing" else f" (got {short_repr(item.get('input'))})"
         parts[loc] = f"field {'.'.join(loc)!r}: {reason}{got}" if loc else reason
     return "; ".join(parts.values())
 
@@ -91,8 +93,53 @@ def _is_union_tag(part: object) -> bool:
     )
 
 
-def _short(value: Any, limit: int = 60) -> str:
-    text = repr(value)
+class _BoundedRepr(reprlib.Repr):
+    """``reprlib`` limits (3 levels, 6 items, 60 characters) and no full ``repr`` of big ints."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.maxlevel = 3
+        self.maxtuple = self.maxlist = self.maxarray = self.maxdict = 6
+        self.maxset = self.maxfrozenset = self.maxdeque = 6
+        self.maxstring = self.maxother = self.maxlong = 60
+
+    def repr_int(self, x: int, level: int) -> str:
+        if x.bit_length() > 192:  # str(int) is quadratic and refused past 4300 digits
+            return f"<{'-' if x < 0 else ''}int of {x.bit_length()} bits>"
+        return super().repr_int(x, level)
+
+    def repr_instance(self, x: object, level: int) -> str:
+        try:
+            return super().repr_instance(x, level)
+        except Exception:  # noqa: BLE001 - a broken __repr__ must not hide the real error
+            return f"<{type(x).__name__}>"
+
+
+_BOUNDED_REPR = _BoundedRepr()
+
+
+def short_repr(value: Any, limit: int = 60) -> str:
+    """A ``repr`` of ``value`` of at most ``limit`` characters, in bounded time and memory.
+
+    Error messages quote the values they refuse; a value read from a file may be huge
+    (a long list, a deeply nested or alias-shared structure whose full ``repr`` is
+    gigabytes), so it is rendered item by item with :mod:`reprlib`'s limits (three
+    levels, six items per container) before it is cut to ``limit``: the full ``repr``
+    is never built.
+
+    Examples
+    --------
+    >>> short_repr({"a": list(range(100))})
+    "{'a': [0, 1, 2, 3, 4, 5, ...]}"
+    >>> shared = [1]
+    >>> for _ in range(200):  # 2**200 leaves if expanded
+    ...     shared = [shared, shared]
+    >>> short_repr(shared)
+    '[[[[...], [...]], [[...], [...]]], [[[...], [...]], [[......'
+    >>> short_repr(10**5000)
+    '<int of 16610 bits>'
+    """
+    text = _BOUNDED_REPR.repr(value)
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 

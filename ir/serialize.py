@@ -12,9 +12,12 @@ Every node has an ``id`` and an ``op`` (a name in the op registry); ``input: x``
 names its one input, ``inputs: [a, b]`` several; the other keys are the op's
 parameters (see :mod:`ir.ops`). Writing drops parameters equal to their defaults,
 so ``graph -> dict -> graph`` is exact and ``dict -> graph -> dict`` is exact up
-to defaults. Reading never runs code: YAML goes through ``yaml.safe_load``,
-JSON through ``json.loads``; duplicate keys are refused in both (YAML and JSON
-would silently keep the last one).
+to defaults. Reading never runs code: YAML goes through PyYAML's safe loader (libyaml's
+C parser where available), JSON through ``json.loads``, both within the bounds of
+:mod:`ir.parsing` (nesting depth, nodes after alias expansion); duplicate keys are
+refused in both (YAML and JSON would silently keep the last one), in YAML as the
+values they construct (``1`` and ``1.0``, ``yes`` and ``true``).  Files are read up to
+:data:`MAX_CHAIN_FILE_BYTES`.
 
 Examples
 --------
@@ -54,8 +57,9 @@ from pydantic import ValidationError
 
 from ir.errors import ChainFileError, IRError
 from ir.graph import Graph
-from ir.model import describe_validation_error, is_name
+from ir.model import describe_validation_error, is_name, short_repr
 from ir.ops import OP_REGISTRY, OpRegistry
+from ir.parsing import load_json, load_yaml
 
 __all__ = [
     "describe_yaml_error",
@@ -67,8 +71,10 @@ __all__ = [
     "graph_to_yaml",
 ]
 
-#: Largest chain file read (a device such as /dev/zero would otherwise be read forever).
-MAX_CHAIN_FILE_BYTES = 64 << 20
+#: Largest chain file read: 8 MiB (a device such as /dev/zero would otherwise be read
+#: forever).  With the node bound of :mod:`ir.parsing` it bounds the parse time
+#: (docs/reliability.md); a 47 000-node chain is about 3.3 MiB.
+MAX_CHAIN_FILE_BYTES = 8 << 20
 
 _TOP_KEYS = ("name", "nodes")
 _ENVELOPE = ("id", "op", "input", "inputs")
@@ -145,7 +151,7 @@ radarsnn command know the built-in ops only; docs/howto-op.md)
         raise ChainFileError(f"unknown top-level keys {extra}; allowed: {list(_TOP_KEYS)}")
     name = data.get("name", "chain")
     if not isinstance(name, str) or not name:
-        raise ChainFileError(f"chain 'name' must be a non-empty string; got {name!r}")
+        raise ChainFileError(f"chain 'name' must be a non-empty string; got {short_repr(name)}")
     nodes = data.get("nodes")
     if not isinstance(nodes, list):
         raise ChainFileError(
@@ -182,14 +188,19 @@ def _read_envelope(
     """Split one node mapping into id, op class, input ids and op parameters."""
     where = f"chain {name!r}, node #{index}"
     if not isinstance(entry, Mapping):
-        raise ChainFileError(f"{where}: must be a mapping with 'id' and 'op'; got {entry!r}")
+        raise ChainFileError(f"{where}: must be a mapping with 'id' and 'op'; got "
+                             f"{short_repr(entry)}")
     id = entry.get("id")
     if not is_name(id):
         raise ChainFileError(
-            f"{where}: " + ("missing 'id'" if id is None else f"malformed id {id!r}")
+            f"{where}: " + ("missing 'id'" if id is None else f"malformed id {short_repr(id)}")
             + "; ids use letters, digits, '_' or '-' and do not start with a digit"
         )
     where = f"chain {name!r}, node {id!r}"
+    odd = [k for k in entry if not isinstance(k, str)]
+    if odd:  # op parameters are keyword arguments
+        raise ChainFileError(f"{where}: key {short_repr(odd[0])} ({type(odd[0]).__name__}) is "
+                             "not a field name; quote it or remove it", node=id)
     op_name = entry.get("op")
     if not isinstance(op_name, str) or op_name not in registry:  # a list/dict is unhashable
         own = (f" (an op defined in Python is known to readers given its class, "
@@ -197,7 +208,8 @@ def _read_envelope(
                "program artifacts and the radarsnn command know the built-in ops only; "
                "docs/howto-op.md)" if isinstance(op_name, str) and is_name(op_name) else "")
         raise ChainFileError(
-            f"{where}: " + ("missing 'op'" if op_name is None else f"unknown op {op_name!r}")
+            f"{where}: "
+            + ("missing 'op'" if op_name is None else f"unknown op {short_repr(op_name)}")
             + f"; valid ops: {', '.join(sorted(registry))}{own}",
             node=id,
         )
@@ -209,11 +221,11 @@ def _read_envelope(
     else:
         inputs = entry.get("inputs", [])
         if not isinstance(inputs, list):
-            raise ChainFileError(f"{where}: 'inputs' must be a list of ids; got {inputs!r}",
-                                 node=id)
+            raise ChainFileError(f"{where}: 'inputs' must be a list of ids; got "
+                                 f"{short_repr(inputs)}", node=id)
     bad = [i for i in inputs if not is_name(i)]
     if bad:
-        raise ChainFileError(f"{where}: malformed input id {bad[0]!r}", node=id)
+        raise ChainFileError(f"{where}: malformed input id {short_repr(bad[0])}", node=id)
     params = {k: v for k, v in entry.items() if k not in _ENVELOPE}
     params["op"] = op_name
     return id, registry[op_name], tuple(inputs), params
@@ -241,8 +253,7 @@ def graph_from_yaml(source: str | Path, *, registry: OpRegistry | None = None) -
     """
     text, label = _read_source(source)
     try:
-        _reject_duplicate_yaml_keys(text)
-        data = yaml.safe_load(text)
+        data = load_yaml(text, error=ChainFileError)
         return graph_from_dict(_as_mapping(data, source), registry=registry)
     except yaml.YAMLError as err:
         raise ChainFileError(f"{label}invalid YAML: {describe_yaml_error(err)}") from err
@@ -270,30 +281,6 @@ def describe_yaml_error(err: yaml.YAMLError) -> str:
     return f"{where}: {problem}" + (f" ({context})" if context else "")
 
 
-def _reject_duplicate_yaml_keys(text: str) -> None:
-    """Walk the composed (not constructed) YAML nodes and refuse repeated mapping keys."""
-    root = yaml.compose(text, Loader=yaml.SafeLoader)
-    stack, seen = [root], set()
-    while stack:
-        node = stack.pop()
-        if node is None or id(node) in seen:
-            continue
-        seen.add(id(node))
-        if isinstance(node, yaml.MappingNode):
-            keys: set[str] = set()
-            for key, value in node.value:
-                if isinstance(key, yaml.ScalarNode):
-                    if key.value in keys:
-                        raise ChainFileError(
-                            f"line {key.start_mark.line + 1}: duplicate key {key.value!r} "
-                            "(YAML would silently keep the last one); remove one"
-                        )
-                    keys.add(key.value)
-                stack += [key, value]
-        elif isinstance(node, yaml.SequenceNode):
-            stack += node.value
-
-
 # -- JSON ---------------------------------------------------------------------------------
 
 
@@ -313,7 +300,8 @@ def graph_from_json(source: str | Path, *, registry: OpRegistry | None = None) -
     """
     text, label = _read_source(source)
     try:
-        data = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant)
+        data = load_json(text, error=ChainFileError, object_pairs_hook=_unique_pairs,
+                         parse_constant=_no_constant)
         return graph_from_dict(_as_mapping(data, source), registry=registry)
     except json.JSONDecodeError as err:
         raise ChainFileError(f"{label}invalid JSON: {err}") from err

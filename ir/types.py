@@ -26,10 +26,16 @@ from pydantic import Field, PositiveInt, model_validator
 from ir.errors import IRError
 from ir.model import IRModel, Name
 
-__all__ = ["DOMAINS", "Domain", "TensorType"]
+__all__ = ["DOMAINS", "MAX_AXES", "Domain", "TensorType"]
 
 Domain = Literal["amplitude", "power", "db", "mask"]
 DOMAINS: tuple[str, ...] = ("amplitude", "power", "db", "mask")
+
+#: Most axes a value may have.  numpy arrays have at most 64 dimensions, and the
+#: reference implementations add some: a CFAR's sliding windows double them, the
+#: simulator adds a frames axis and a ``part`` axis (2 x 24 + 2 = 50).  A CFAR over 32
+#: axes already fails in numpy; radar values need 5 or 6.
+MAX_AXES = 24
 
 
 class TensorType(IRModel):
@@ -38,7 +44,7 @@ class TensorType(IRModel):
     Parameters
     ----------
     axes : dict[str, int]
-        Axis name -> size, in array dimension order; at least one axis, sizes >= 1.
+        Axis name -> size, in array dimension order; 1 to :data:`MAX_AXES` axes, sizes >= 1.
     complex : bool, default False
         Whether values are complex. Only the ``amplitude`` domain may be complex.
     domain : {"amplitude", "power", "db", "mask"}, default "amplitude"
@@ -47,8 +53,8 @@ class TensorType(IRModel):
     Raises
     ------
     IRError
-        If an axis size is < 1, an axis name is malformed, there are no axes,
-        or a non-amplitude domain is complex.
+        If an axis size is < 1, an axis name is malformed, there are no axes or more
+        than :data:`MAX_AXES`, or a non-amplitude domain is complex.
 
     Examples
     --------
@@ -66,6 +72,14 @@ class TensorType(IRModel):
     axes: dict[Name, PositiveInt] = Field(min_length=1)
     complex: bool = False
     domain: Domain = "amplitude"
+
+    @model_validator(mode="after")
+    def _few_enough_axes(self) -> TensorType:
+        if len(self.axes) > MAX_AXES:
+            raise ValueError(f"{len(self.axes)} axes, over the limit of {MAX_AXES} (MAX_AXES: "
+                             "numpy arrays have at most 64 dimensions, and windows and frames "
+                             "add some); merge axes")
+        return self
 
     @model_validator(mode="after")
     def _only_amplitude_is_complex(self) -> TensorType:
@@ -103,6 +117,18 @@ class TensorType(IRModel):
         for n in self.axes.values():
             total *= n
         return total
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of a numpy array of this type: 16 per complex element, 8 per real one, 1 per
+        mask element (a Python int: a declared size need not fit in 64 bits).
+
+        Examples
+        --------
+        >>> TensorType(axes={"a": 3}, complex=True).nbytes, TensorType(axes={"a": 2**62}).nbytes
+        (48, 36893488147419103232)
+        """
+        return self.size * (1 if self.domain == "mask" else 16 if self.complex else 8)
 
     def index(self, axis: str) -> int:
         """Dimension index of ``axis``.

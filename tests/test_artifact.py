@@ -473,3 +473,94 @@ def test_forged_manifest_entries_are_checked(rich_dir: Path) -> None:
         _resign(rich_dir, forged(path, value))
         err = _load_error(rich_dir, why)
         assert str(rich_dir) in str(err)
+
+
+# ---------------------------------------------------------------- hostile sizes and nesting
+
+
+def _npy_with_header(shape: tuple, data: bytes = b"\0" * 64, descr: str = "<f8") -> bytes:
+    """A ``.npy`` whose header declares ``shape`` whatever the data (a forger's member)."""
+    header = repr({"descr": descr, "fortran_order": False, "shape": shape}).encode()
+    header += b" " * (63 - (len(header) + 10) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header + data
+
+
+def _zip(members: dict[str, bytes], method: int = zipfile.ZIP_STORED) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=method) as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    return buffer.getvalue()
+
+
+def test_artifact_files_over_their_size_caps_are_refused_unread(rich_dir: Path) -> None:
+    from backends.artifact_io import MAX_ARRAYS_BYTES, MAX_MANIFEST_BYTES
+
+    arrays = rich_dir / ARRAYS_FILE
+    with arrays.open("r+b") as f:  # sparse: 4 GiB + 1 on disk costs nothing
+        f.truncate(MAX_ARRAYS_BYTES + 1)
+    _load_error(rich_dir, rf"arrays\.npz: {MAX_ARRAYS_BYTES + 1} bytes, over the limit of "
+                          f"{MAX_ARRAYS_BYTES} bytes")
+    manifest = rich_dir / MANIFEST_FILE
+    with manifest.open("r+b") as f:
+        f.truncate(MAX_MANIFEST_BYTES + 1)
+    _load_error(rich_dir, rf"manifest\.json: {MAX_MANIFEST_BYTES + 1} bytes, over the limit")
+
+
+@pytest.mark.parametrize(("member", "why"), [
+    (_npy_with_header((10**12,)), r"declares shape \(1000000000000,\) of <f8 \(8000000000000 "
+                                  r"bytes\) but the member holds 64 bytes"),
+    (_npy_with_header((2**62, 4)), r"declares shape \(4611686018427387904, 4\)"),
+    (_npy_with_header((-8,)), r"declares shape \(-8,\)"),
+    (_npy_with_header((1,) * 100, b"\0" * 8), r"not a readable \.npz.*64"),
+    (_npy_with_header((3,), b"\0" * 24, "|O"), "object arrays are refused"),
+])
+def test_npz_members_are_checked_before_numpy_allocates(rich_dir: Path, member: bytes,
+                                                        why: str) -> None:
+    good = _stored_arrays(rich_dir)
+    members = {f"{k}.npy": _npy(v) for k, v in good.items()}
+    members["projections.0.weights.npy"] = member
+    _resign(rich_dir, npz=_zip(members))  # digests re-signed: the parser must catch it
+    err = _load_error(rich_dir, why)
+    assert "projections.0.weights.npy" in str(err) or "not a readable" in str(err)
+
+
+def _npy(array: np.ndarray) -> bytes:
+    buffer = io.BytesIO()
+    np.save(buffer, array, allow_pickle=False)
+    return buffer.getvalue()
+
+
+def test_damaged_deflate_members_and_odd_zips_are_artifact_errors(rich_dir: Path) -> None:
+    good = {f"{k}.npy": _npy(v) for k, v in _stored_arrays(rich_dir).items()}
+    deflated = bytearray(_zip(good, zipfile.ZIP_DEFLATED))
+    with zipfile.ZipFile(io.BytesIO(bytes(deflated))) as zf:
+        info = zf.getinfo("projections.0.weights.npy")
+    start = info.header_offset + 30 + len(info.filename) + len(info.extra)
+    deflated[start] = 0xFF  # deflate block type 3: invalid (zlib.error, not a CRC mismatch)
+    _resign(rich_dir, npz=bytes(deflated))
+    _load_error(rich_dir, r"not a readable \.npz of plain arrays \(error: Error -3 while "
+                          r"decompressing data: invalid block type\)")
+    _resign(rich_dir, npz=_zip({**good, "notes.txt": b"hi"}))
+    _load_error(rich_dir, r"member 'notes\.txt' is not a \.npy array")
+    from backends.artifact_io import read_npz
+
+    with pytest.raises(ArtifactError, match=r"members declare \d+ bytes uncompressed, over the "
+                                            "limit of 100 bytes"):
+        read_npz(_zip(good), rich_dir / ARRAYS_FILE, limit=100)
+
+
+@pytest.mark.parametrize("version", ["\u00b20.0", "1.\u00b2", "1" * 5000 + ".0"])
+def test_format_versions_are_ascii_major_minor(rich_dir: Path, version: str) -> None:
+    manifest = json.loads((rich_dir / MANIFEST_FILE).read_text())
+    manifest["format_version"] = version
+    _resign(rich_dir, manifest)
+    _load_error(rich_dir, r"format_version .* is not MAJOR\.MINOR \(digits 0-9\)")
+
+
+def test_deeply_nested_manifests_are_refused_without_recursion(rich_dir: Path) -> None:
+    text = (rich_dir / MANIFEST_FILE).read_text()
+    deep = text.replace('"extra": {}', '"extra": ' + "[" * 5000 + "]" * 5000, 1)
+    assert deep != text
+    (rich_dir / MANIFEST_FILE).write_text(deep)
+    _load_error(rich_dir, r"manifest\.json: line \d+: nested deeper than 64 levels")

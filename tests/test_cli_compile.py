@@ -133,3 +133,70 @@ def test_program_artifacts_keep_the_axis_order(tmp_path):
     assert list(back.graph.infer_types()["adc"].axes) == ["rx", "chirp", "sample"]
     x = np.arange(64.0).reshape(2, 4, 8)
     np.testing.assert_array_equal(run_program(back, {"adc": x}).outputs["o"], x ** 2)
+
+
+def test_option_values_are_parsed_within_the_yaml_bounds(capsys, tmp_path):
+    bomb = "[&a [1, 1, 1, 1, 1, 1, 1, 1], " + ", ".join(
+        f"&{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]"
+        for p, c in zip("abcdefgh", "bcdefghi", strict=True)) + "]"
+    assert main(["compile", str(TI), "-o", str(tmp_path / "x"), "--option",
+                 f"fft_radices={bomb}"]) == 2
+    err = capsys.readouterr().err
+    assert "option 'fft_radices': line 1: the document has more than 524288 YAML nodes" in err
+    assert len(err) < 1000
+
+
+@pytest.mark.parametrize("field", ["graph", "report"])
+def test_deeply_nested_json_fields_of_a_program_are_refused(compiled, tmp_path, field):
+    import shutil
+
+    from backends.artifact_io import render_json
+    from backends.manifest import seal
+
+    copy = tmp_path / "copy"
+    shutil.copytree(compiled, copy)
+    path = copy / "program.json"
+    manifest = json.loads(path.read_text())
+    manifest[field] = "[" * 5000 + "]" * 5000
+    del manifest["manifest_sha256"]
+    path.write_bytes(render_json(seal(manifest)))  # re-signed: the parser must catch it
+    with pytest.raises(ArtifactError, match=rf"program\.json: field '{field}': line 1: nested "
+                                            "deeper than 64 levels"):
+        load(copy)
+
+
+def test_npy_inputs_declaring_more_than_the_limit_are_refused_unread(tmp_path):
+    from compiler.cli.chain import load_arrays
+    from ir.errors import RadarSNNError
+
+    header = repr({"descr": "<f8", "fortran_order": False, "shape": ((1 << 29) + 1,)}).encode()
+    header += b" " * (63 - (len(header) + 10) % 64) + b"\n"
+    head = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header
+    sparse = tmp_path / "x.npy"  # 4 GiB + 8 bytes of (sparse) data: all there
+    with sparse.open("wb") as f:
+        f.write(head)
+        f.truncate(len(head) + (4 << 30) + 8)
+    with pytest.raises(RadarSNNError, match=r"\(4294967304 bytes\), over the limit of "
+                                            r"4294967296 bytes \(MAX_NPY_BYTES\)"):
+        load_arrays([str(sparse)], ["x"], "chain")
+    with pytest.raises(RadarSNNError, match="not a regular file"):
+        load_arrays(["/dev/zero"], ["x"], "chain")
+
+
+@pytest.mark.parametrize("ref", ["x" * 300, "networks/a\x00b"])
+def test_a_network_path_the_file_system_refuses_is_an_artifact_error(compiled, tmp_path, ref):
+    import shutil
+
+    from backends.artifact_io import render_json
+    from backends.manifest import seal
+
+    copy = tmp_path / "copy"
+    shutil.copytree(compiled, copy)
+    path = copy / "program.json"
+    manifest = json.loads(path.read_text())
+    spiking = next(s for s in manifest["segments"] if s["kind"] == "spiking")
+    spiking["network"]["path"] = ref  # OSError: File name too long / ValueError: NUL byte
+    del manifest["manifest_sha256"]
+    path.write_bytes(render_json(seal(manifest)))
+    with pytest.raises(ArtifactError, match=r"program\.json: network path '.*' cannot be used"):
+        load(copy)

@@ -165,3 +165,42 @@ def test_literals_evaluate_back_to_their_value(value):
     else:
         assert back == value and type(back) is type(value)
     assert text.isascii()
+
+
+def _npy_declaring(shape: tuple, data: bytes = b"\0" * 64, descr: str = "<f8") -> bytes:
+    header = repr({"descr": descr, "fortran_order": False, "shape": shape}).encode()
+    header += b" " * (63 - (len(header) + 10) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header + data
+
+
+def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
+    net = SpikingNetwork(
+        name="tiny", n_steps=6,
+        populations=[Population(id="in", shape={"i": 2}, source=True),
+                     Population(id="out", shape={"o": 1},
+                                params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
+        projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
+                                      produce=("o",), weights=np.ones((2, 1)))],
+        encoders=[Encoder(port="x", population="in",
+                          code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
+        decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    pkg = emit_numpy(net, tmp_path, name="snn_tiny")
+    sparse = tmp_path / "sparse.npy"  # declares 4 GiB + 8 bytes, and holds them (sparse)
+    head = _npy_declaring(((1 << 29) + 1,), b"")
+    with sparse.open("wb") as f:
+        f.write(head)
+        f.truncate(len(head) + (4 << 30) + 8)
+    cases = {"giant.npy": (_npy_declaring((10**12,)), "declares shape (1000000000000,) of "
+                           "float64 (8000000000000 bytes), over the limit"),
+             "short.npy": (_npy_declaring((9,)), "(72 bytes) but the file holds 64"),
+             "object.npy": (_npy_declaring((2,), descr="|O"), "object arrays are refused")}
+    for name, (data, _) in cases.items():
+        (tmp_path / name).write_bytes(data)
+    cases["sparse.npy"] = (b"", "(4294967304 bytes), over the limit of 4294967296 bytes")
+    for name, (_, why) in cases.items():
+        done = subprocess.run([sys.executable, "-m", pkg.name, f"x={tmp_path / name}", "-o",
+                               str(tmp_path / "out.npz")], cwd=pkg.parent, capture_output=True,
+                              text=True, timeout=120, check=False)
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.startswith("error: cannot read") and why in done.stderr, done.stderr
+        assert len(done.stderr.strip().splitlines()) == 1, done.stderr

@@ -125,3 +125,32 @@ def test_limit_options_are_compile_options_with_checked_values():
                 {"max_time_s": "1h"}, {"max_memory_bytes": True}):
         with pytest.raises(CompileError, match=next(iter(bad))):
             compile_graph(_dft_chain(4), target=None, options=bad)
+
+
+BAD_LIMITS = [float("nan"), float("inf"), "x", "1h", True, -1, 0, [1]]
+
+
+@pytest.mark.parametrize("name", ["max_memory_bytes", "max_time_s"])
+@pytest.mark.parametrize("value", BAD_LIMITS, ids=repr)
+def test_a_bad_limit_is_a_typed_error_naming_it_never_a_disabled_guard(name, value):
+    x = {"x": np.full((5, 4), 0.5)}
+    with pytest.raises(SimulationError, match=rf"network 'n': {name}=.* must be a positive "
+                                              "finite number"):
+        simulate(_net(), x, **{name: value})
+    host_only = compile_graph(_dft_chain(4), target=None, motifs={"f": "host"})  # no guard ran
+    with pytest.raises(SimulationError, match=rf"program 'big': {name}=.* must be a positive"):
+        run_program(host_only, {"x": np.ones(4, complex)}, **{name: value})
+    with pytest.raises(CompileError, match=rf"chain 'big': {name}=.* must be a positive"):
+        check_compile(_dft_chain(4), **{name: value})
+    with pytest.raises(CompileError, match=rf"compile option: {name}=.* must be a positive"):
+        limits_from_options({name: value})
+
+
+def test_raster_limit_and_input_keys_are_checked():
+    x = {"x": np.full((5, 4), 0.5)}
+    for value in (float("nan"), "x"):
+        with pytest.raises(SimulationError, match="raster_limit_bytes=.* must be a positive"):
+            simulate(_net(), x, record_spikes=True, raster_limit_bytes=value)
+    program = compile_graph(_dft_chain(4), target=None, motifs={"f": "host"})
+    with pytest.raises(SimulationError, match=r"input key 1 \(int\) is not an input node id"):
+        run_program(program, {1: np.ones(4), "x": np.ones(4, complex)})

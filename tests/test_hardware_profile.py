@@ -74,3 +74,21 @@ def test_errors_name_the_field_and_file(tmp_path):
         load_profile(tmp_path / "missing.yaml")
     with pytest.raises(CompileError, match="unknown hardware profile 'tpu'"):
         load_profile("tpu")
+
+
+LAUGHS = ("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n" + "".join(
+    f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+    for p, c in zip("abcdefgh", "bcdefghi", strict=True)))
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    (LAUGHS, r"line 6: the document has more than 524288 YAML nodes"),
+    ("name: x\nchips: " + "[" * 70 + "]" * 70 + "\n", "line 2: nested deeper than 64 levels"),
+    ("name: x\nchips: 1\n1: a\ntrue: b\n", r"line 4: duplicate key True"),
+    ("name: x\nchips: 1\nchips: 2\n", r"line 3: duplicate key 'chips'"),
+])
+def test_hostile_profile_files_are_compile_errors_naming_the_file(tmp_path, text, match):
+    path = tmp_path / "hostile.yaml"
+    path.write_text(text)
+    with pytest.raises(CompileError, match=r"hardware profile file '.*hostile\.yaml': " + match):
+        load_profile(path)

@@ -345,3 +345,47 @@ def test_custom_ops_through_explicit_registries() -> None:
     assert isinstance(info.value.__cause__, RadarConfigError)
     with pytest.raises(IRError, match="unknown op 'scale'"):
         Graph.from_dict(SCALE_CHAIN)
+
+
+def _huge_dft_chain(n_fft: int = 2**63) -> Graph:
+    return Graph.from_dict({"nodes": [
+        {"id": "x", "op": "input", "shape": {"a": 4}},
+        {"id": "f", "op": "dft", "input": "x", "axis": "a", "n_fft": n_fft},
+        {"id": "o", "op": "output", "input": "f"}]})
+
+
+def test_evaluate_refuses_values_over_its_limit_from_the_types_before_numpy():
+    from ir.errors import IRError
+
+    impossible = (r"graph 'chain': node 'f' \(dft\) is a \{'a': 9223372036854775808\} value of "
+                  r"1\.5e\+20 bytes, more than any array can hold")
+    with pytest.raises(IRError, match=impossible) as info:
+        evaluate(_huge_dft_chain(), {"x": np.ones(4)})  # numpy's "Maximum allowed dimension"
+    assert info.value.node == "f"
+    with pytest.raises(IRError, match=impossible):
+        evaluate(_huge_dft_chain(), {"x": np.ones(4)}, max_memory_bytes=None)
+    with pytest.raises(IRError, match=r"graph 'chain': evaluating needs 2\.2e\+12 bytes for "
+                                      r"the values .*the largest is node 'f' \(dft\)"):
+        evaluate(_huge_dft_chain(2**36), {"x": np.ones(4)})  # a 1 TB MemoryError before
+    small = Graph.from_dict({"nodes": [{"id": "x", "op": "input", "shape": {"a": 4}},
+                                       {"id": "o", "op": "output", "input": "x"}]})
+    assert evaluate(small, {"x": np.ones(4)}, max_memory_bytes=64)["o"].shape == (4,)
+    with pytest.raises(IRError, match="over max_memory_bytes=63"):
+        evaluate(small, {"x": np.ones(4)}, max_memory_bytes=63)
+
+
+def test_compile_and_run_program_refuse_values_no_array_can_hold():
+    from backends.reference import run_program
+    from compiler.compile import compile_graph
+    from ir.errors import BudgetError, SimulationError
+
+    with pytest.raises(BudgetError, match=r"node 'f' \(dft\) is a .* more than any array"):
+        compile_graph(_huge_dft_chain(), target=None, options={  # OverflowError before
+            "max_memory_bytes": None, "max_time_s": None, "input_bounds": {"x": 1.0}})
+    host = Graph.from_dict({"name": "h", "nodes": [
+        {"id": "x", "op": "input", "shape": {"a": 4}, "domain": "power"},
+        {"id": "t", "op": "threshold", "input": "x", "value": 1.0},
+        {"id": "o", "op": "output", "input": "t"}]})
+    program = compile_graph(host, target=None)
+    with pytest.raises(SimulationError, match="running the program needs 40 bytes"):
+        run_program(program, {"x": np.ones(4)}, max_memory_bytes=39)

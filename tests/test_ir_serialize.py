@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import tracemalloc
 from pathlib import Path
 
 import pytest
@@ -182,3 +183,109 @@ def test_files_are_named_in_errors(tmp_path: Path) -> None:
     g = Graph.from_yaml(CHAINS / "ti_range.yaml")
     good.write_text(g.to_json())
     assert Graph.from_json(good) == g
+
+
+# -- hostile input: huge values in messages, alias and nesting bombs ------------------------
+
+
+def _shared_tree(levels: int) -> list:
+    """A list whose full ``repr`` has 2**levels leaves, built from ``levels`` shared lists."""
+    tree: list = ["lol"]
+    for _ in range(levels):
+        tree = [tree, tree]
+    return tree
+
+
+@pytest.mark.parametrize("where", ["name", "id", "op", "input", "param"])
+def test_messages_quote_a_huge_value_in_bounded_size(where: str) -> None:
+    # 2**22 leaves: a full repr is 30 MB (2**62 leaves, from a 500-byte alias bomb, never ends)
+    bomb = _shared_tree(22)
+    node = {"id": "t", "op": "threshold", "input": "x", "value": 1.0}
+    data: dict = {"name": "c", "nodes": [node]}
+    if where == "name":
+        data["name"] = bomb
+    elif where == "param":
+        node["value"] = bomb
+    else:
+        node[where] = bomb
+    tracemalloc.start()
+    try:
+        with pytest.raises(ChainFileError) as info:
+            Graph.from_dict(data)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(str(info.value)) < 600 and "[[" in str(info.value)
+    assert peak < 4 << 20, f"{peak} bytes allocated to describe the value"
+
+
+def _laughs(levels: int, width: int = 9) -> str:
+    """A "billion laughs" chain: ``width ** levels`` strings from ``levels`` short lines."""
+    lines = ['name: &a ["lol"' + ', "lol"' * (width - 1) + "]"]
+    anchors = "abcdefghijklmnop"
+    for prev, here in zip(anchors, anchors[1:levels + 1], strict=False):
+        lines.append(f"x{here}: &{here} [" + ", ".join([f"*{prev}"] * width) + "]")
+    return "\n".join(lines) + "\nnodes: []\n"
+
+
+def test_a_yaml_alias_bomb_is_refused_by_counting_before_it_expands(tmp_path: Path) -> None:
+    bomb = tmp_path / "laughs.yaml"
+    bomb.write_text(_laughs(9))  # 9**10 = 3.5e9 strings from ~500 bytes
+    assert bomb.stat().st_size < 600
+    with pytest.raises(ChainFileError, match=r"laughs\.yaml: line 6: the document has more "
+                                             r"than 524288 YAML nodes .*MAX_YAML_NODES"):
+        Graph.from_yaml(bomb)
+    with pytest.raises(ChainFileError, match=r"alias \*a is inside the node it names"):
+        Graph.from_yaml("name: c\nnodes: &a [*a]\n")
+
+
+def test_yaml_parsing_uses_libyaml_and_refuses_files_over_the_size_and_node_caps(
+        tmp_path: Path) -> None:
+    from ir.parsing import MAX_YAML_NODES, YAML_LOADER
+    from ir.serialize import MAX_CHAIN_FILE_BYTES
+
+    if hasattr(yaml, "CSafeLoader"):
+        assert YAML_LOADER is yaml.CSafeLoader
+    assert MAX_CHAIN_FILE_BYTES == 8 << 20
+    big = tmp_path / "big.yaml"
+    with big.open("wb") as f:
+        f.truncate(MAX_CHAIN_FILE_BYTES + 1)
+    with pytest.raises(ChainFileError, match=r"big\.yaml: .*8388609 bytes, over the "
+                                             r"8388608-byte limit"):
+        Graph.from_yaml(big)
+    many = "name: c\nnodes: [" + "1, " * MAX_YAML_NODES + "]\n"  # 1.5 MiB, no aliases
+    with pytest.raises(ChainFileError, match="more than 524288 YAML nodes"):
+        Graph.from_yaml(many)
+
+
+@pytest.mark.parametrize("fmt", ["yaml", "json"])
+def test_deeply_nested_chain_files_are_refused_without_recursion(fmt: str) -> None:
+    deep = "[" * 5000 + "]" * 5000
+    with pytest.raises(ChainFileError, match=r"nested deeper than 64 levels"):
+        if fmt == "yaml":
+            Graph.from_yaml(f"name: c\nnodes: {'[' * 65}{']' * 65}\n")
+        else:
+            Graph.from_json('{"name": "c", "nodes": ' + deep + "}")
+    if fmt == "yaml":  # libyaml stops at 1000 levels itself: an invalid-YAML error
+        with pytest.raises(ChainFileError):
+            Graph.from_yaml(f"name: c\nnodes: {deep}\n")
+
+
+@pytest.mark.parametrize(("keys", "dup"), [("1: a\n    1.0: b", "1.0"), ("yes: a\n    true: b",
+                                           "True"), ("null: a\n    ~: b", "None")])
+def test_yaml_keys_equal_as_values_are_duplicates(keys: str, dup: str) -> None:
+    text = f"nodes:\n  - id: x\n    op: input\n    {keys}\n"
+    with pytest.raises(ChainFileError, match=rf"line 5: duplicate key {dup} \(equal to the key "
+                                             "on line 4"):
+        Graph.from_yaml(text)
+
+
+def test_unreadable_values_and_non_string_keys_are_chain_file_errors() -> None:
+    with pytest.raises(ChainFileError, match=r"node 'x': key 1 \(int\) is not a field name"):
+        Graph.from_yaml("nodes:\n  - {id: x, op: input, shape: {r: 2}, 1: 2}\n")
+    with pytest.raises(ChainFileError, match=r"line 2: '1111.*' is not a readable !!int value"):
+        Graph.from_yaml("name: c\nnodes: [" + "1" * 5000 + "]\n")
+    with pytest.raises(ChainFileError, match=r"'2001-02-30' is not a readable !!timestamp"):
+        Graph.from_yaml("name: 2001-02-30\nnodes: []\n")
+    with pytest.raises(ChainFileError, match=r"a number cannot be read"):
+        Graph.from_json('{"nodes": [' + "1" * 5000 + "]}")

@@ -65,3 +65,22 @@ def test_types_are_frozen() -> None:
     t = TensorType(axes={"a": 2})
     with pytest.raises(ValidationError, match="frozen"):
         t.complex = True  # type: ignore[misc]
+
+
+def test_more_axes_than_max_axes_are_refused_by_verify_not_by_numpy(tmp_path):
+    from compiler.cli import main
+    from ir import Graph
+
+    def chain(n: int) -> Graph:
+        return Graph.from_dict({"nodes": [
+            {"id": "x", "op": "input", "shape": {f"a{i}": 1 for i in range(n)}},
+            {"id": "m", "op": "magnitude", "input": "x", "kind": "square"},
+            {"id": "o", "op": "output", "input": "m"}]})
+
+    chain(24).verify()  # MAX_AXES
+    with pytest.raises(IRError, match=r"node 'x' \(input\): TensorType: 100 axes, over the limit "
+                                      r"of 24 \(MAX_AXES"):
+        chain(100).verify()
+    path = tmp_path / "axes.yaml"
+    path.write_text(chain(100).to_yaml())
+    assert main(["report", str(path)]) == 2  # numpy's 64-dimension ValueError before

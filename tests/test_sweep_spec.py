@@ -101,3 +101,15 @@ def test_slices_partition_the_frames(n, step):
     assert sl[0][0] == 0 and sl[-1][1] == n
     assert all(b - a == step for a, b in sl[:-1]) and 0 < sl[-1][1] - sl[-1][0] <= step
     assert all(sl[i][1] == sl[i + 1][0] for i in range(len(sl) - 1))
+
+
+def test_hostile_sweep_files_are_compile_errors(tmp_path):
+    path = tmp_path / "laughs.yaml"
+    path.write_text("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n" + "".join(
+        f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+        for p, c in zip("abcdefgh", "bcdefghi", strict=True)))
+    with pytest.raises(CompileError, match=r"laughs\.yaml'?: line 6: the document has more "
+                                           "than 524288 YAML nodes"):
+        load_spec(path)
+    with pytest.raises(CompileError, match=r"cannot be read: not a regular file"):
+        load_spec("/dev/zero")

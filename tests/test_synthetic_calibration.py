@@ -99,3 +99,20 @@ def test_compile_report_and_emit_without_calibration(name, tmp_path, capsys):
 def test_the_db_sweep_chain_reports_without_calibration(capsys):
     assert main(["report", str(EXAMPLES / "sweeps" / "os_cfar_db.yaml"), "-q"]) == 0
     assert "synthetic noise" in capsys.readouterr().out
+
+
+def test_synthetic_inputs_refuse_an_input_too_large_to_draw():
+    from ir import Graph
+    from ir.errors import BudgetError
+
+    def chain(n: int) -> Graph:
+        return Graph.from_dict({"nodes": [{"id": "x", "op": "input", "shape": {"a": n}},
+                                          {"id": "o", "op": "output", "input": "x"}]})
+
+    with pytest.raises(BudgetError, match=r"node 'x' \(input\) is a \{'a': 4611686018427387904\} "
+                                          "value of 3.7e.19 bytes, more than any array") as info:
+        synthetic_inputs(chain(2**62), seed=0)  # numpy's "array is too big" ValueError before
+    assert info.value.node == "x"
+    with pytest.raises(BudgetError, match=r"drawing synthetic calibration inputs needs 8\.8e\+12 "
+                                          r"bytes for the values \(over max_memory_bytes="):
+        synthetic_inputs(chain(2**40), seed=0)  # an 8.8 TB MemoryError before

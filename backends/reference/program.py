@@ -26,14 +26,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
+from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S, check_limit
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.evaluate import check_input, eval_registry, evaluate_node
+from ir.evaluate import check_input, check_value_sizes, eval_registry, evaluate_node
+from ir.model import short_repr
 
 __all__ = ["ProgramResult", "check_program", "program_plans", "run_program"]
 
@@ -219,8 +220,9 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         host node without an implementation, or whose implementation fails or returns
         the wrong shape (naming the node).
     SimulationError
-        Missing or unknown inputs, a value out of an encoder's range under
-        ``reject``, an unknown policy, or a segment that cannot run.
+        Missing or unknown inputs (or a key that is not a string), a value out of an
+        encoder's range under ``reject``, an unknown policy, a limit that is not a positive
+        finite number or None, or a segment that cannot run.
 
     Notes
     -----
@@ -240,15 +242,27 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     if not isinstance(arithmetic, str) or arithmetic not in ("float64", "int64"):
         raise SimulationError(f"{where}: arithmetic {arithmetic!r} is not one of "
                               "('float64', 'int64')")
+    # checked here too: a program without spiking segments never reaches the guard
+    check_limit("max_memory_bytes", max_memory_bytes, "bytes", where=where)
+    check_limit("max_time_s", max_time_s, "s", where=where)
     check_program(program)
     graph = program.graph
     types = graph.infer_types()
     expected = set(graph.input_ids())
+    odd = [k for k in inputs if not isinstance(k, str)]
+    if odd:
+        raise SimulationError(f"{where}: input key {short_repr(odd[0])} "
+                              f"({type(odd[0]).__name__}) is not an input node id; key the "
+                              f"arrays by the graph's input ids {sorted(expected)}")
     missing, extra = expected - set(inputs), set(inputs) - expected
     if missing or extra:
         raise SimulationError(f"program {graph.name!r}: inputs {sorted(inputs)} do not match the "
                               f"graph's input nodes {sorted(expected)} (missing "
                               f"{sorted(missing)}, unknown {sorted(extra)})")
+    # every node's value is kept: refuse what cannot fit before the first is allocated
+    check_value_sizes(graph, types, types, max_memory_bytes=check_limit(
+        "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
+        doing="running the program")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
     impls = eval_registry(program.evaluators)
     decoded: set[str] = set()  # nodes whose value went through a spiking segment's decoder

@@ -10,7 +10,13 @@ import numpy as np
 from backends.reference.closed import closed_form_problems, run_closed
 from backends.reference.decoding import check_decoders, decode_outputs
 from backends.reference.encoding import encode_inputs
-from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S, check_simulation, frames_in
+from backends.reference.guards import (
+    MAX_MEMORY_BYTES,
+    MAX_TIME_S,
+    check_limit,
+    check_simulation,
+    frames_in,
+)
 from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import Activity, SimResult
@@ -147,6 +153,8 @@ def simulate(
     if not isinstance(inputs, Mapping):
         raise SimulationError(f"network {network.name!r}: inputs must be a mapping of port to "
                               f"array; got {type(inputs).__name__}")
+    raster_limit = check_limit("raster_limit_bytes", raster_limit_bytes, "bytes",
+                               where=f"network {network.name!r}")
     if plan is None:
         network.validate()
         problems = closed_form_problems(network)
@@ -172,7 +180,7 @@ def simulate(
                                              clipped=clipped)
     if record_spikes:
         need = n_frames * network.n_steps * sum(p.size for p in network.populations)
-        if need > raster_limit_bytes:
+        if raster_limit is not None and need > raster_limit:
             raise SimulationError(f"network {network.name!r}: spike rasters would take {need} "
                                   f"bytes ({n_frames} frames x {network.n_steps} steps x "
                                   f"{need // max(1, n_frames * network.n_steps)} neurons), over "

@@ -14,7 +14,12 @@ from pathlib import Path
 
 from ir.errors import RadarSNNError
 
-__all__ = ["add_parsers", "load_arrays", "parse_options", "read_npy", "write_output"]
+__all__ = ["MAX_NPY_BYTES", "add_parsers", "load_arrays", "parse_options", "read_npy",
+           "write_output"]
+
+#: Largest array a ``.npy`` input may declare: 4 GiB (the artifacts' array limit; a bigger
+#: input could not be simulated within the default memory limit anyway).
+MAX_NPY_BYTES = 4 << 30
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -94,15 +99,19 @@ def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
 def read_npy(path: str, what: str):
     """One array from a ``.npy`` file, never unpickling; ``what`` names it in errors.
 
-    The header is read first: object dtypes are refused and the data it declares
-    must be in the file, so a damaged header cannot make numpy allocate or parse
-    beyond the file.
+    The header is read first: object dtypes are refused, the data it declares must be
+    at most :data:`MAX_NPY_BYTES` and in the file, so a damaged or forged header cannot
+    make numpy allocate or parse beyond the file (a sparse file declaring 10¹² values
+    included).
 
     Raises
     ------
     RadarSNNError
-        Missing, empty, truncated or damaged files, object arrays, ``.npz`` archives.
+        Missing, empty, truncated or damaged files, not a regular file, object arrays,
+        a declared size over :data:`MAX_NPY_BYTES`, ``.npz`` archives.
     """
+    import os
+    import stat
     import tokenize
 
     import numpy as np
@@ -112,6 +121,8 @@ def read_npy(path: str, what: str):
                 MemoryError, TypeError)
     try:
         with open(path, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):  # /dev/zero, a FIFO, a tty
+                raise RadarSNNError(f"cannot read {what}: not a regular file")
             if f.read(4) == b"PK\x03\x04":
                 raise RadarSNNError(f"cannot read {what}: it is a .npz archive; give one array "
                                     "per .npy file (np.save)")
@@ -124,6 +135,10 @@ def read_npy(path: str, what: str):
                                     "them would unpickle code); save a numeric array")
             need = int(np.prod(shape, dtype=object)) * dtype.itemsize
             have = _remaining(f)
+            if need > MAX_NPY_BYTES:
+                raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
+                                    f"({need} bytes), over the limit of {MAX_NPY_BYTES} bytes "
+                                    "(MAX_NPY_BYTES); give fewer frames per file")
             if have < need:
                 raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
                                     f"({need} bytes) but the file holds {have}; truncated?")
@@ -149,18 +164,23 @@ def parse_options(items: list[str] | None) -> dict:
     """
     import yaml
 
+    from ir.model import short_repr
+    from ir.parsing import load_yaml
+
     options = {}
     for item in items or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise RadarSNNError(f"option {item!r} is not KEY=VALUE (e.g. headroom=1.5)")
+            raise RadarSNNError(f"option {short_repr(item)} is not KEY=VALUE (e.g. headroom=1.5)")
         try:
-            options[key] = yaml.safe_load(value)
+            options[key] = load_yaml(value, error=RadarSNNError)
         except yaml.YAMLError as err:
             from ir.serialize import describe_yaml_error
 
-            raise RadarSNNError(f"option {key!r}: value {value!r} is not YAML "
-                                f"({describe_yaml_error(err)})") from None
+            raise RadarSNNError(f"option {short_repr(key)}: value {short_repr(value)} is not "
+                                f"YAML ({describe_yaml_error(err)})") from None
+        except RadarSNNError as err:
+            raise RadarSNNError(f"option {short_repr(key)}: {err}") from None
     return options
 
 

@@ -25,6 +25,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ir.errors import CompileError
+from ir.model import short_repr
 
 __all__ = ["BUDGETS", "BUILTIN_PROFILES", "HardwareProfile", "load_profile"]
 
@@ -206,18 +207,22 @@ loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
 
 
 def _from_text(text: str, label: str) -> HardwareProfile:
-    try:
-        data: Any = yaml.safe_load(text)
+    from ir.parsing import load_yaml
+
+    try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
+        data: Any = load_yaml(text, error=CompileError)
     except yaml.YAMLError as err:
         from ir.serialize import describe_yaml_error
 
         raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
+    except CompileError as err:
+        raise CompileError(f"{label}: {err}") from err
     if not isinstance(data, dict):
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
     try:  # model_validate: a non-string key is a field error, not a TypeError of **data
         return HardwareProfile.model_validate(data)
     except ValidationError as err:
-        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {e.get('input')!r}: {e['msg']}"
-                 for e in err.errors(include_url=False)]
+        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {short_repr(e.get('input'))}: "
+                 f"{e['msg']}" for e in err.errors(include_url=False)]
         raise CompileError(f"{label}: " + "; ".join(parts)) from err

@@ -53,6 +53,7 @@ import networkx as nx
 import numpy as np
 
 from compiler.calibration import Calibration, NodeCalibration, measure, second_moment
+from compiler.guards import limits_from_options
 from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
@@ -169,12 +170,14 @@ class Calibrate(Pass):
         norm = {n: mixed_axes(graph, n) if policy == "per-input" else ()
                 for n in graph.input_ids()}
         if ctx.calibration_inputs:
+            limit = limits_from_options(ctx.options)[0]  # the compile option max_memory_bytes
             frames, n_frames = _frames(graph, dict(ctx.calibration_inputs))
             per_node: dict[str, list[np.ndarray]] = {}
             for frame in frames:
                 frame = {k: normalize_values(v, tuple(types[k].index(a) for a in norm[k]))
                          for k, v in frame.items()}
-                for node, value in evaluate(graph, frame, registry=ctx.evaluators).items():
+                for node, value in evaluate(graph, frame, registry=ctx.evaluators,
+                                            max_memory_bytes=limit).items():
                     if value.dtype != bool:
                         per_node.setdefault(node, []).append(value)
             nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()),

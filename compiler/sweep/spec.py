@@ -1,6 +1,6 @@
 """The sweep specification: a grid of compile options × a frame source × metrics.
 
-A sweep file (YAML, read with ``yaml.safe_load``) names the chains, the grid and
+A sweep file (YAML, read with :func:`ir.parsing.load_yaml`) names the chains, the grid and
 the frames; :func:`load_spec` validates it into a :class:`SweepSpec` and
 :meth:`SweepSpec.points` expands the Cartesian product of the grid into
 **points** (one compile each).  A **cell** is one point on one slice of
@@ -39,8 +39,10 @@ from pydantic import BaseModel, ConfigDict, Field, PositiveInt, ValidationError,
 from ir.errors import CompileError
 
 __all__ = ["SceneFrames", "FolderFrames", "MetricSpec", "FigureSpec", "SweepSpec", "Point",
-           "load_spec", "parse_spec", "cell_key", "NAMED_AXES"]
+           "load_spec", "parse_spec", "cell_key", "MAX_SWEEP_FILE_BYTES", "NAMED_AXES"]
 
+#: Largest sweep file read (not a device, not a giant).
+MAX_SWEEP_FILE_BYTES = 1 << 20
 #: Grid axes besides :data:`compiler.compile.EXTRA_OPTIONS` (each a ``compile_graph`` argument,
 #: ``chain`` a key of ``chains``, ``mode`` the simulator engine).
 NAMED_AXES = ("chain", "target", "motifs", "calibration", "time_steps", "weight_bits", "mode")
@@ -238,7 +240,8 @@ def load_spec(path: str | Path) -> SweepSpec:
     Parameters
     ----------
     path : str or Path
-        A YAML file (``yaml.safe_load``: no code runs).
+        A YAML file of at most :data:`MAX_SWEEP_FILE_BYTES` (read with
+        :func:`ir.parsing.load_yaml`: no code runs, nesting and aliases bounded).
 
     Returns
     -------
@@ -255,13 +258,21 @@ def load_spec(path: str | Path) -> SweepSpec:
     >>> load_spec("examples/sweeps/small.yaml").name
     'small'
     """
+    from ir.parsing import load_yaml
+
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as err:
-        raise CompileError(f"sweep file {str(path)!r} cannot be read: {err.strerror}") from None
+        if not path.is_file() or path.stat().st_size > MAX_SWEEP_FILE_BYTES:
+            raise CompileError(f"sweep file {str(path)!r} cannot be read: not a regular file "
+                               f"of at most {MAX_SWEEP_FILE_BYTES} bytes")
+        data = load_yaml(path.read_text(encoding="utf-8"), error=CompileError)
+    except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
+        why = getattr(err, "strerror", None) or err
+        raise CompileError(f"sweep file {str(path)!r} cannot be read: {why}") from None
     except yaml.YAMLError as err:
         raise CompileError(f"sweep file {str(path)!r}: not valid YAML: {err}") from None
+    except CompileError as err:
+        raise CompileError(f"sweep file {str(path)!r}: {err}") from None
     if not isinstance(data, dict):
         raise CompileError(f"sweep file {str(path)!r}: expected a mapping of sweep fields, got "
                            f"{type(data).__name__}")

@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import math
 import os
+import resource
 import traceback
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -54,6 +55,23 @@ def outcome(call: Callable[[], Any], culprits: Iterable[str]) -> Any:
     except Exception as err:  # noqa: BLE001 - the point: anything else is a bug
         raise AssertionError("not a RadarSNNError:\n" + "".join(
             traceback.format_exception(err))) from err
+
+
+def bounded_outcome(call: Callable[[], Any], culprits: Iterable[str],
+                    max_growth: int = 1 << 30) -> Any:
+    """:func:`outcome`, and the process's peak memory may grow by at most ``max_growth``
+    bytes meanwhile (a forged header that makes a reader allocate gigabytes fails here even
+    when the read ends in a proper error)."""
+    before = peak_rss()
+    result = outcome(call, culprits)
+    growth = peak_rss() - before
+    assert growth <= max_growth, f"peak memory grew by {growth} bytes"
+    return result
+
+
+def peak_rss() -> int:
+    """The process's peak resident memory so far, bytes (``ru_maxrss`` is in KiB on Linux)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 def expect_radarsnn_error(err: RadarSNNError, culprits: Iterable[str]) -> None:
@@ -128,3 +146,88 @@ def byte_mutations(draw: st.DrawFn, data: bytes) -> bytes:
         return data[:at] + data[at + draw(st.integers(1, 64)):]
     end = min(n, at + draw(st.integers(1, 256)))
     return data[:end] + data[at:end] + data[end:]
+
+
+# -- hostile documents: alias and nesting bombs, values no constructor builds -----------------
+
+#: (width, levels) of "billion laughs" aliases: a few small enough to read, most refused by the
+#: node count (width ** levels), the last ones by the nesting depth too (levels + 1).
+LAUGHS = [(2, 3), (3, 4), (4, 6), (9, 7), (9, 9), (10, 12), (30, 9), (2, 70), (4, 100)]
+#: Nesting depths around the bound (64) and far past it (libyaml stops at 1 000 itself).
+DEPTHS = [10, 63, 64, 65, 200, 1000, 5000, 100_000]
+
+
+def laughs(width: int, levels: int) -> str:
+    """One flow-style YAML value holding ``width ** levels`` strings via ``levels`` anchors."""
+    parts = ["&l0 [" + ", ".join(["lol"] * width) + "]"]
+    parts += [f"&l{k} [" + ", ".join([f"*l{k - 1}"] * width) + "]" for k in range(1, levels)]
+    return "[" + ", ".join(parts) + "]"
+
+
+@st.composite
+def yaml_bombs(draw: st.DrawFn) -> str:
+    """A one-line YAML value that a bounded parser must refuse (or read, if small)."""
+    kind = draw(st.sampled_from(["laughs", "laughs", "recursive", "deep", "deep_alias",
+                                 "duplicate", "value"]))
+    if kind == "laughs":
+        return laughs(*draw(st.sampled_from(LAUGHS)))
+    if kind == "recursive":
+        return draw(st.sampled_from(["&r [*r]", "&r {k: *r}", "&r [1, [2, *r]]",
+                                     "[&r [1], *r, &s [*s]]"]))
+    if kind == "deep":
+        depth = draw(st.sampled_from(DEPTHS))
+        return draw(st.sampled_from(["[" * depth + "]" * depth,
+                                     "{a: " * depth + "1" + "}" * depth]))
+    if kind == "deep_alias":  # each alias under 64 levels, the expansion deeper
+        inner, outer = draw(st.sampled_from([(40, 30), (60, 10), (30, 30), (64, 1)]))
+        return "[&d " + "[" * inner + "]" * inner + ", " + "[" * outer + "*d" + "]" * outer + "]"
+    if kind == "duplicate":
+        return draw(st.sampled_from(["{1: a, 1.0: b}", "{yes: a, true: b}", "{null: a, ~: b}",
+                                     "{1: a, true: b}", "{0: a, false: b}", "{a: 1, a: 2}"]))
+    return draw(st.sampled_from(["1" * 4301, "-" + "9" * 10_000, "2001-02-30", "!!bool x",
+                                 "!!int 0x", "!!float x", "!!timestamp 2001", "!!binary '@@'",
+                                 "2001-12-14t21:59:43.10-99:00", "!!set {a}", "!!str [1]"]))
+
+
+@st.composite
+def json_bombs(draw: st.DrawFn) -> str:
+    """A JSON value a bounded parser must refuse (or read): deep nesting, giant integers."""
+    kind = draw(st.sampled_from(["deep", "deep", "mixed", "int"]))
+    depth = draw(st.sampled_from(DEPTHS))
+    if kind == "deep":
+        return "[" * depth + "]" * depth
+    if kind == "mixed":  # brackets in strings must not count; objects count like arrays
+        return '{"a": ' * depth + '"[[[{{{"' + "}" * depth
+    return draw(st.sampled_from(["1" * 4301, "-" + "9" * 10_000, "1" * 4300, "1e999999"]))
+
+
+#: Declared ``.npy`` shapes that must never reach an allocation unchecked.
+HUGE_SHAPES = [(10**12,), (2**62, 4), (2**31, 2**31), (0, 10**18, 10**18), (-1,), (-8, 2),
+               (1,) * 100, (2**29 + 1,), (3,), ()]
+HUGE_DESCRS = ["<f8", "<c16", "|b1", "|O", "|V2000000000", "<U1000000000",
+               "[('a', '<f8', (1000000, 1000000))]", "<f8"]
+
+
+def npy_header(shape: tuple, descr: str, version: int = 1) -> bytes:
+    """The magic and header of a ``.npy`` declaring ``shape`` of ``descr`` (no data)."""
+    text = "{'descr': " + (descr if descr.startswith("[") else repr(descr)) + \
+        f", 'fortran_order': False, 'shape': {shape!r}, }}"
+    header = text.encode("latin1")
+    size = 4 if version == 2 else 2
+    header += b" " * (63 - (len(header) + 8 + size) % 64) + b"\n"
+    return (b"\x93NUMPY" + bytes([version, 0]) + len(header).to_bytes(size, "little")
+            + header)
+
+
+@st.composite
+def huge_npy(draw: st.DrawFn) -> tuple[bytes, int]:
+    """A forged ``.npy`` and how long to make its file with a sparse tail (0: as is): a
+    header declaring a huge, negative or odd shape and dtype with a few data bytes, or one
+    declaring 4 GiB + 8 bytes (over the 4 GiB input limit) that a sparse file holds."""
+    version = draw(st.sampled_from([1, 2]))
+    if draw(st.integers(0, 4)) == 0:
+        head = npy_header(((1 << 29) + 1,), "<f8", version)
+        return head, len(head) + (4 << 30) + 8
+    head = npy_header(draw(st.sampled_from(HUGE_SHAPES)), draw(st.sampled_from(HUGE_DESCRS)),
+                      version)
+    return head + bytes(draw(st.sampled_from([0, 8, 24, 64]))), 0

@@ -1,23 +1,42 @@
 """Fuzz: network and program artifacts — damaged bytes, forged (re-signed) JSON edits, version
-skew, missing and extra files.  A load either refuses with an error naming the file, or gives
-a network/program that then simulates or refuses with a typed error.
+skew, missing and extra files, nesting bombs and giant integers in any JSON value (and in
+``program.json``'s graph and report texts), forged ``arrays.npz`` members whose ``.npy``
+headers declare huge, negative or object shapes (re-signed), and files over their size cap
+(sparse).  A load either refuses with an error naming the file, or gives a network/program
+that then simulates or refuses with a typed error.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import shutil
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
-from fuzz_support import JUNK, budget, byte_mutations, outcome
+from fuzz_support import (
+    JUNK,
+    bounded_outcome,
+    budget,
+    byte_mutations,
+    huge_npy,
+    json_bombs,
+    outcome,
+)
 from hypothesis import given, note
 from hypothesis import strategies as st
 
 from backends import load, save
-from backends.artifact_io import canonical_json, render_json, sha256_hex
+from backends.artifact_io import (
+    MAX_ARRAYS_BYTES,
+    MAX_MANIFEST_BYTES,
+    canonical_json,
+    render_json,
+    sha256_hex,
+)
 from backends.reference import run_program, simulate
 from compiler.compile import compile_graph
 from compiler.program import CompiledProgram
@@ -143,7 +162,7 @@ def _culprits(folder: Path, *values: object) -> list[str]:
             *(str(v) for v in values if isinstance(v, str) and v)]
 
 
-@budget(0.4)
+@budget(0.35)
 @given(st.sampled_from(["network", "program"]), st.data(), st.integers(0, 9))
 def test_byte_damaged_artifacts(templates, kind, data, slot) -> None:
     folder = _copy(templates, kind, slot)
@@ -153,7 +172,7 @@ def test_byte_damaged_artifacts(templates, kind, data, slot) -> None:
     outcome(lambda: _use(folder, kind), _culprits(folder))
 
 
-@budget(0.4)
+@budget(0.35)
 @given(st.sampled_from(["network", "program"]), st.data(), st.integers(0, 9))
 def test_forged_manifest_edits(templates, kind, data, slot) -> None:
     folder = _copy(templates, kind, slot)
@@ -172,17 +191,22 @@ def test_forged_manifest_edits(templates, kind, data, slot) -> None:
         values.append(value)
         note(f"{kind}: {victim.relative_to(folder)} {action} {path} = {value!r}")
     _resign(victim, doc)
+    _resign_reference(folder, kind, victim)
+    outcome(lambda: _use(folder, kind), _culprits(folder, *values))
+
+
+def _resign_reference(folder: Path, kind: str, victim: Path) -> None:
+    """A program's ``program.json`` re-signed for the network manifest ``victim``'s new digest."""
     if kind == "program" and victim.parent != folder and victim.name == "manifest.json":
-        program = json.loads((folder / "program.json").read_text())  # re-sign the reference too
+        program = json.loads((folder / "program.json").read_text())
         for seg in program["segments"]:
             if seg.get("network", {}).get("path") == str(victim.parent.relative_to(folder)):
                 seg["network"]["manifest_sha256"] = json.loads(victim.read_text()).get(
                     "manifest_sha256")
         _resign(folder / "program.json", program)
-    outcome(lambda: _use(folder, kind), _culprits(folder, *values))
 
 
-@budget(0.2)
+@budget(0.1)
 @given(st.sampled_from(["network", "program"]), st.data(), st.integers(0, 9))
 def test_missing_extra_and_moved_files(templates, kind, data, slot) -> None:
     folder = _copy(templates, kind, slot)
@@ -204,3 +228,72 @@ def test_missing_extra_and_moved_files(templates, kind, data, slot) -> None:
         folder.mkdir()
     note(f"{kind}: {action} {victim.relative_to(folder)}")
     outcome(lambda: _use(folder, kind), _culprits(folder))
+
+
+SPOT = "BOMB_GOES_HERE"
+
+
+@budget(0.1)
+@given(st.sampled_from(["network", "program"]), json_bombs(), st.data(), st.integers(0, 9))
+def test_nesting_bombs_and_giant_numbers_in_artifact_json(templates, kind, bomb, data,
+                                                          slot) -> None:
+    folder = _copy(templates, kind, slot)
+    victim = data.draw(st.sampled_from([p for p in _files(folder) if p.suffix == ".json"]))
+    doc = json.loads(victim.read_text())
+    where = data.draw(st.sampled_from(["value", "value", "graph", "report", "document"]))
+    if where == "document":
+        victim.write_text(bomb)
+    elif where in ("graph", "report") and victim.name == "program.json":
+        doc[where] = bomb  # JSON text inside the manifest: re-signed, parsed after the digest
+        _resign(victim, doc)
+    else:
+        path = data.draw(st.sampled_from([p for p in _paths(doc)[1:]
+                                          if p[-1:] != ("manifest_sha256",)]))
+        try:  # a bomb json can read (shallow, small): a re-signed, canonical forgery
+            doc = _edit(doc, path, "set", json.loads(bomb))
+            _resign(victim, doc)
+            _resign_reference(folder, kind, victim)
+        except (RecursionError, ValueError):  # deep or giant: spliced into the text
+            doc = _edit(doc, path, "set", SPOT)
+            _resign(victim, doc)
+            victim.write_text(victim.read_text().replace(f'"{SPOT}"', bomb))
+    note(f"{kind}: {victim.relative_to(folder)} {where}: {bomb[:200]}")
+    outcome(lambda: _use(folder, kind), _culprits(folder))
+
+
+def _zip(members: dict[str, bytes], method: int) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=method) as zf:
+        for name, raw in members.items():
+            zf.writestr(name, raw)
+    return buffer.getvalue()
+
+
+@budget(0.1)
+@given(st.sampled_from(["network", "program"]), huge_npy(), st.data(), st.integers(0, 9))
+def test_forged_npz_members_and_oversize_files(templates, kind, member, data, slot) -> None:
+    folder = _copy(templates, kind, slot)
+    npy, _ = member
+    action = data.draw(st.sampled_from(["member", "member", "member", "oversize"]))
+    if action == "oversize":  # sparse: the size alone must refuse it, unread
+        victim = data.draw(st.sampled_from(_files(folder)))
+        limit = MAX_ARRAYS_BYTES if victim.suffix == ".npz" else MAX_MANIFEST_BYTES
+        with victim.open("r+b") as f:
+            f.truncate(limit + 1)
+        note(f"{kind}: {victim.relative_to(folder)} grown to {limit + 1} bytes")
+        bounded_outcome(lambda: _use(folder, kind), _culprits(folder))
+        return
+    arrays = data.draw(st.sampled_from([p for p in _files(folder) if p.name == "arrays.npz"]))
+    with zipfile.ZipFile(arrays) as zf:
+        members = {info.filename: zf.read(info) for info in zf.infolist()}
+    name = data.draw(st.sampled_from(sorted(members)))
+    members[name] = npy
+    raw = _zip(members, data.draw(st.sampled_from([zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED])))
+    arrays.write_bytes(raw)
+    manifest_path = arrays.with_name("manifest.json")
+    manifest = json.loads(manifest_path.read_text())
+    manifest["arrays"].update(sha256=sha256_hex(raw), n_bytes=len(raw))
+    _resign(manifest_path, manifest)  # re-signed: the npz reader must catch it
+    _resign_reference(folder, kind, manifest_path)
+    note(f"{kind}: {arrays.relative_to(folder)} member {name} = {npy[:120]!r}")
+    bounded_outcome(lambda: _use(folder, kind), _culprits(folder))

@@ -2,8 +2,10 @@
 
 Mutations: junk in any field (wrong types, NaN/Inf, huge/zero/negative sizes, hostile
 strings), missing/extra fields and nodes, unknown ops, self-loops, cycles, duplicate and
-unknown ids, axis mix-ups, and byte-level damage of the file (truncation, flipped and
-inserted bytes).  A valid result must round-trip and (when small) evaluate.
+unknown ids, axis mix-ups, byte-level damage of the file (truncation, flipped and
+inserted bytes), and hostile documents spliced into any field: alias bombs, recursive
+aliases, nesting far past the bound, keys equal as values, integers of 4 301+ digits and
+values no constructor builds.  A valid result must round-trip and (when small) evaluate.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from fuzz_support import JUNK, budget, byte_mutations, outcome
+from fuzz_support import JUNK, budget, byte_mutations, json_bombs, outcome, yaml_bombs
 from hypothesis import given, note
 from hypothesis import strategies as st
 from test_ir_properties import chains
@@ -144,7 +146,7 @@ def _dump(doc: object, fmt: str) -> bytes:
     return yaml.safe_dump(doc, sort_keys=False, allow_unicode=True).encode()
 
 
-@budget(0.5)
+@budget(0.4)
 @given(mutated_docs(), st.sampled_from(["yaml", "json"]), st.integers(0, 9))
 def test_structurally_mutated_chain_files(folder, case, fmt, slot) -> None:
     doc, touched = case
@@ -155,7 +157,7 @@ def test_structurally_mutated_chain_files(folder, case, fmt, slot) -> None:
     outcome(lambda: _read_and_check(path, fmt), [str(path), *touched, *_ids(doc), repr(name)])
 
 
-@budget(0.5)
+@budget(0.4)
 @given(st.sampled_from(sorted(EXAMPLES)), st.sampled_from(["yaml", "json"]), st.data(),
        st.integers(0, 9))
 def test_byte_damaged_chain_files(folder, name, fmt, data, slot) -> None:
@@ -165,3 +167,30 @@ def test_byte_damaged_chain_files(folder, name, fmt, data, slot) -> None:
     path.write_bytes(damaged)
     note(repr(damaged[:2000]))
     outcome(lambda: _read_and_check(path, fmt), [str(path), *_ids(doc), *_ids(_try_load(damaged))])
+
+
+SPOT = "BOMB_GOES_HERE"
+
+
+@budget(0.2)
+@given(st.sampled_from(sorted(EXAMPLES)), st.sampled_from(["yaml", "json"]), st.data(),
+       st.integers(0, 9))
+def test_alias_and_nesting_bombs_in_chain_files(folder, name, fmt, data, slot) -> None:
+    doc = copy.deepcopy(EXAMPLES[name])
+    where = data.draw(st.sampled_from(["name", "nodes", "node", "param", "shape", "document"]))
+    node = data.draw(st.sampled_from(doc["nodes"]))
+    if where in ("name", "nodes"):
+        doc[where] = SPOT
+    elif where == "node":
+        doc["nodes"][doc["nodes"].index(node)] = SPOT
+    elif where == "param":
+        node[data.draw(st.sampled_from(sorted(node)))] = SPOT
+    elif where == "shape":
+        node["shape"] = {"range": SPOT}
+    bomb = data.draw(yaml_bombs() if fmt == "yaml" else json_bombs())
+    text = SPOT if where == "document" else _dump(doc, fmt).decode()
+    text = text.replace(f'"{SPOT}"' if fmt == "json" else SPOT, bomb)
+    path = folder / f"bomb{slot}.{fmt}"
+    path.write_text(text)
+    note(f"{where}: {bomb[:300]}")
+    outcome(lambda: _read_and_check(path, fmt), [str(path), *_ids(doc)])

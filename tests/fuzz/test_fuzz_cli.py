@@ -1,5 +1,6 @@
-"""Fuzz: ``radarsnn`` argument vectors — wrong paths, unreadable and damaged files, bad
-options and values, hostile strings.  Every run exits 0 (or 1 for a failed check), or 2 with
+"""Fuzz: ``radarsnn`` argument vectors — wrong paths, unreadable and damaged files, alias and
+nesting bombs (chains, profiles, ``--option`` values), ``.npy`` headers declaring huge sizes,
+bad options and values, hostile strings.  Every run exits 0 (or 1 for a failed check), or 2 with
 exactly one line ``error: …`` on stderr (a JSON object on stdout with ``--json``) and never
 a traceback.
 """
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fuzz_support import HOSTILE_STRINGS, budget
+from fuzz_support import HOSTILE_STRINGS, budget, laughs, npy_header
 from hypothesis import given, note
 from hypothesis import strategies as st
 
@@ -47,6 +48,13 @@ def files():
         np.save(root / "x_nan.npy", np.full(8, np.nan))
         np.save(root / "x_wrong.npy", np.zeros((2, 3)))
         (root / "x_bad.npy").write_bytes(b"\x93NUMPY junk")
+        (root / "x_huge.npy").write_bytes(npy_header((10**12,), "<f8") + bytes(64))
+        with (root / "x_sparse.npy").open("wb") as f:  # 4 GiB + 8 declared, held as holes
+            head = npy_header(((1 << 29) + 1,), "<f8")
+            f.write(head)
+            f.truncate(len(head) + (4 << 30) + 8)
+        (root / "laughs.yaml").write_text(f"name: {laughs(9, 9)}\nnodes: []\n")
+        (root / "deep.yaml").write_text("name: x\nnodes: " + "[" * 5000 + "]" * 5000 + "\n")
         program = compile_graph(Graph.from_yaml(TINY), target="loihi2",
                                 calibration_inputs={"a": x})
         save(program, root / "program")
@@ -57,19 +65,24 @@ def files():
 
 def _pools(root: Path) -> dict[str, list[str]]:
     paths = [str(root / n) for n in ("tiny.yaml", "broken.yaml", "cycle.yaml", "binary.yaml",
-                                     "empty.yaml", "missing.yaml", "program", "network", "out")]
+                                     "empty.yaml", "missing.yaml", "program", "network", "out",
+                                     "laughs.yaml", "deep.yaml")]
     paths += ["/dev/null", "/", "", "-", "\x01"]
     npys = [str(root / n) for n in ("x.npy", "x_big.npy", "x_nan.npy", "x_wrong.npy",
-                                    "x_bad.npy", "nope.npy")] + [str(root / "program")]
+                                    "x_bad.npy", "nope.npy", "x_huge.npy", "x_sparse.npy")] + [
+        str(root / "program")]
     inputs = npys + [f"{port}={p}" for port in ("a", "c/in", "bogus", "") for p in npys[:3]]
     return {
         "paths": paths,
         "inputs": inputs,
         "targets": ["loihi", "loihi2", "spinnaker2", "unbounded", "tpu", str(root / "tiny.yaml"),
-                    str(root / "missing.yaml"), str(root / "binary.yaml"), ""],
+                    str(root / "missing.yaml"), str(root / "binary.yaml"), "",
+                    str(root / "laughs.yaml"), str(root / "deep.yaml")],
         "options": ["headroom=1.5", "headroom=-1", "headroom=nan", "bogus=1", "=1", "noeq",
                     "max_memory_bytes=10", "max_memory_bytes=-5", "max_time_s=0",
-                    "cfar_ties=[1, 2]", "time_steps=3", "headroom={a: [}"],
+                    "cfar_ties=[1, 2]", "time_steps=3", "headroom={a: [}",
+                    f"fft_radices={laughs(9, 9)}", "headroom=" + "[" * 5000, "headroom=&a [*a]",
+                    "max_time_s=.nan", "max_memory_bytes=x"],
         "motifs": ["c=host", "c=bogus", "cfar=host", "ghost=host", "noeq", "c=", "=host"],
         "numbers": ["-1", "0", "1", "3", "64", "1e9", "abc", "99999999999999999999", ""],
         "out": [str(root / "out" / "art"), str(root / "out" / "r.npz"), str(root / "tiny.yaml"),

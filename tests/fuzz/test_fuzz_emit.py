@@ -1,12 +1,15 @@
 """Fuzz: generated code — networks whose ids, ports, name and meta are hostile strings are
 emitted, parsed (every identifier plain ASCII, no hostile text outside string constants),
 imported and run in-process against the reference simulator; damaged artifacts are
-refused by the emitter with an error naming the file.
+refused by the emitter with an error naming the file; the package's command line
+(``__main__.main``) refuses ``.npy`` inputs whose headers declare huge, negative or object
+shapes with one ``error:`` line and exit status 2.
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import importlib
 import io
 import re
@@ -18,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fuzz_support import HOSTILE_STRINGS, budget, byte_mutations, outcome
+from fuzz_support import HOSTILE_STRINGS, budget, byte_mutations, huge_npy, outcome, peak_rss
 from hypothesis import given, note
 from hypothesis import strategies as st
 
@@ -87,7 +90,7 @@ def _check_sources(pkg: Path, hostile: list[str]) -> None:
 _COUNTER = iter(range(10**9))
 
 
-@budget(0.6)
+@budget(0.5)
 @given(st.lists(IDS, min_size=8, max_size=8, unique=True), IDS,
        st.lists(st.floats(0, 1.5), min_size=3, max_size=3))
 def test_hostile_ids_emit_run_and_match(folder, ids, name, x) -> None:
@@ -116,7 +119,7 @@ def test_hostile_ids_emit_run_and_match(folder, ids, name, x) -> None:
         np.testing.assert_array_equal(outputs[key], value)
 
 
-@budget(0.4)
+@budget(0.3)
 @given(st.data(), st.integers(0, 9))
 def test_damaged_artifacts_are_refused_by_the_emitter(folder, data, slot) -> None:
     art = folder / f"art{slot}"
@@ -127,3 +130,38 @@ def test_damaged_artifacts_are_refused_by_the_emitter(folder, data, slot) -> Non
     out = folder / f"out{slot}"
     outcome(lambda: emit_numpy(art, out, name="pkg"), [str(art), str(victim)])
     shutil.rmtree(out, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def command(folder):
+    """The ``__main__`` module of one generated package, imported in-process."""
+    emit_numpy(_network(["in", "mid", "w", "w2", "x", "a", "b", "n"], "net"), folder,
+               name="fuzzcli")
+    yield importlib.import_module("fuzzcli.__main__")
+    for key in [k for k in sys.modules if k == "fuzzcli" or k.startswith("fuzzcli.")]:
+        del sys.modules[key]
+
+
+@budget(0.2)
+@given(huge_npy(), st.integers(0, 9))
+def test_the_package_command_line_refuses_huge_declared_inputs(folder, command, case,
+                                                               slot) -> None:
+    data, sparse = case
+    path = folder / f"huge{slot}.npy"
+    with path.open("wb") as f:
+        f.write(data)
+        if sparse:
+            f.truncate(sparse)
+    note(f"{data[:120]!r}, {sparse} bytes")
+    err = io.StringIO()
+    before = peak_rss()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            code = command.main([f"x={path}", "-o", str(folder / f"out{slot}.npz")])
+        except SystemExit as exit_:
+            code = exit_.code
+    path.unlink()
+    assert peak_rss() - before <= 1 << 30, "the command line read gigabytes"
+    lines = err.getvalue().strip().splitlines()
+    assert code == 0 or (code == 2 and len(lines) == 1 and lines[0].startswith("error: ")), (
+        code, err.getvalue()[-2000:])

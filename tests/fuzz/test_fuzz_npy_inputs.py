@@ -1,5 +1,6 @@
 """Fuzz: ``.npy`` inputs — wrong dtypes and shapes, NaN/Inf, complex where real, object and
-string arrays, truncated or damaged files — through ``load_arrays`` into ``simulate`` (a
+string arrays, truncated or damaged files, headers declaring huge, negative or object shapes
+(with a sparse file holding 4 GiB when asked) — through ``load_arrays`` into ``simulate`` (a
 network) and ``run_program`` (a program), under every out-of-range policy.
 """
 
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fuzz_support import budget, byte_mutations, outcome
+from fuzz_support import bounded_outcome, budget, byte_mutations, huge_npy, outcome
 from hypothesis import given, note
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -109,7 +110,7 @@ def _run(target: str, path: Path, policy: str) -> None:
             assert np.isfinite(result.outputs["o"]).all()
 
 
-@budget(1.0)
+@budget(0.8)
 @given(npy_files(), st.sampled_from(["network", "program"]),
        st.sampled_from(["reject", "warn", "clip"]), st.integers(0, 9))
 def test_npy_inputs(folder, case, target, policy, slot) -> None:
@@ -118,3 +119,17 @@ def test_npy_inputs(folder, case, target, policy, slot) -> None:
     path = folder / f"input{slot}.npy"
     path.write_bytes(data)
     outcome(lambda: _run(target, path, policy), [str(path), "'x'", "'adc'"])
+
+
+@budget(0.2)
+@given(huge_npy(), st.sampled_from(["network", "program"]), st.integers(0, 9))
+def test_npy_inputs_declaring_huge_sizes(folder, case, target, slot) -> None:
+    data, sparse = case
+    path = folder / f"huge{slot}.npy"
+    with path.open("wb") as f:
+        f.write(data)
+        if sparse:  # the data a 4 GiB + 8 header declares, as holes: only the header may decide
+            f.truncate(sparse)
+    note(f"{data[:120]!r}, {sparse} bytes")
+    bounded_outcome(lambda: _run(target, path, "clip"), [str(path), "'x'", "'adc'"])
+    path.unlink()

@@ -1,8 +1,10 @@
 """Fuzz: hardware profile files mutated from the built-in ones — load, then use the budgets.
 
 Mutations: junk in any field (wrong types, NaN/Inf, zero/negative/huge counts, hostile
-strings), missing and extra fields, non-string keys, non-mapping documents, and
-byte-level damage (truncation, flipped and inserted bytes, binary garbage).
+strings), missing and extra fields, non-string keys, non-mapping documents,
+byte-level damage (truncation, flipped and inserted bytes, binary garbage), and hostile
+YAML in any field or as the document: alias bombs, recursive aliases, deep nesting, keys
+equal as values, values no constructor builds.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from fuzz_support import JUNK, budget, byte_mutations, outcome
+from fuzz_support import JUNK, budget, byte_mutations, outcome, yaml_bombs
 from hypothesis import given, note
 from hypothesis import strategies as st
 
@@ -41,7 +43,7 @@ def _use(path: Path) -> HardwareProfile:
     return profile
 
 
-@budget(0.6)
+@budget(0.5)
 @given(st.sampled_from(BUILTIN_PROFILES), st.data(), st.integers(0, 9))
 def test_field_mutated_profiles(folder, name, data, slot) -> None:
     doc = yaml.safe_load(TEXTS[name])
@@ -72,11 +74,28 @@ def test_field_mutated_profiles(folder, name, data, slot) -> None:
     outcome(lambda: _use(path), [str(path), *touched])
 
 
-@budget(0.4)
+@budget(0.3)
 @given(st.sampled_from(BUILTIN_PROFILES), st.data(), st.integers(0, 9))
 def test_byte_damaged_profiles(folder, name, data, slot) -> None:
     damaged = data.draw(byte_mutations(TEXTS[name].encode()))
     path = folder / f"damaged{slot}.yaml"
     path.write_bytes(damaged)
     note(repr(damaged))
+    outcome(lambda: _use(path), [str(path)])
+
+
+@budget(0.2)
+@given(st.sampled_from(BUILTIN_PROFILES), st.data(), st.integers(0, 9))
+def test_alias_and_nesting_bombs_in_profiles(folder, name, data, slot) -> None:
+    doc = yaml.safe_load(TEXTS[name])
+    key = data.draw(st.sampled_from([*FIELDS, "extra", "document"]))
+    bomb = data.draw(yaml_bombs())
+    if key == "document":
+        text = bomb
+    else:
+        doc[key] = "BOMB_GOES_HERE"
+        text = yaml.safe_dump(doc).replace("BOMB_GOES_HERE", bomb)
+    path = folder / f"bomb{slot}.yaml"
+    path.write_text(text)
+    note(f"{key}: {bomb[:300]}")
     outcome(lambda: _use(path), [str(path)])
