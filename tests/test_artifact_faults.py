@@ -193,11 +193,14 @@ def _kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: i
     period = time.perf_counter() - start
     seen, interrupted = [], 0
     for _ in range(kills):
+        ready_r, ready_w = os.pipe()
         pid = os.fork()
         if pid == 0:  # the child: never returns into pytest
             code = 0
             try:
+                os.close(ready_r)
                 i = rng.randrange(2)
+                os.write(ready_w, b"1")  # saving starts now (a loaded machine may delay it)
                 while True:
                     save_one(versions[i % 2], target)
                     i += 1
@@ -205,6 +208,9 @@ def _kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: i
                 code = 3
             finally:
                 os._exit(code)
+        os.close(ready_w)
+        os.read(ready_r, 1)  # kill only a child that is saving
+        os.close(ready_r)
         time.sleep(rng.uniform(0.0, 3 * period))
         os.kill(pid, signal.SIGKILL)
         _, status = os.waitpid(pid, 0)
