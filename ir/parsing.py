@@ -289,6 +289,15 @@ def load_json(text: str, *, error: _Error = ChainFileError, **kwargs: Any) -> An
     RadarSNNError
         ``error``: nested deeper than :data:`MAX_DEPTH`, or an integer of more than
         4 300 digits (Python refuses to convert it).
+
+    Examples
+    --------
+    >>> load_json('{"a": [1, "]]"]}')
+    {'a': [1, ']]']}
+    >>> load_json("1" * 5000)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ir.errors.ChainFileError: a number cannot be read (Exceeds the limit (4300 digits) ...
     """
     if json_depth(text) > MAX_DEPTH:
         raise error(f"line {_line_deeper_than(text, MAX_DEPTH)}: nested deeper than {MAX_DEPTH} "
