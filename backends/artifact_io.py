@@ -6,7 +6,8 @@ Every writer is a pure function of its input (sorted keys, fixed zip dates and
 attributes, no compression), so equal inputs give equal bytes and equal digests.
 Every reader is bounded before it allocates: a file by its size
 (:data:`MAX_MANIFEST_BYTES`, :data:`MAX_ARRAYS_BYTES`), an ``.npz`` member by the size
-its zip entry and its ``.npy`` header declare.
+its zip entry and its ``.npy`` header declare (:func:`read_npz`, from
+:mod:`backends.npz_reader`).
 """
 
 from __future__ import annotations
@@ -16,9 +17,7 @@ import io
 import json
 import math
 import os
-import tokenize
 import zipfile
-import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -26,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from backends.atomic import write_atomic
+from backends.npz_reader import MAX_ARRAYS_BYTES, read_npz
 from ir.errors import ArtifactError
-from ir.model import short_repr
 
 __all__ = [
     "ARRAYS_FILE",
@@ -56,16 +55,7 @@ ARTIFACT_ENTRIES = frozenset({MANIFEST_FILE, ARRAYS_FILE, "program.json", "repor
                               "networks"})
 #: Largest manifest (``manifest.json``, ``program.json``) read: 64 MiB.
 MAX_MANIFEST_BYTES = 64 << 20
-#: Largest ``arrays.npz`` read, and the most its members may declare: 4 GiB (half the
-#: simulator's default memory limit; the compiler's memory guard keeps the weights it writes
-#: well below).
-MAX_ARRAYS_BYTES = 4 << 30
-
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
-# what zipfile, zlib and numpy's header parser raise on damaged bytes
-_DAMAGE = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, NotImplementedError,
-           RuntimeError, ValueError, OSError, EOFError, KeyError, SyntaxError,
-           tokenize.TokenError, TypeError, OverflowError)
 
 
 def sha256_hex(data: bytes) -> str:
@@ -236,91 +226,6 @@ def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
             info.create_system, info.external_attr = 3, 0o644 << 16
             zf.writestr(info, npy.getvalue())
     return buffer.getvalue()
-
-
-def read_npz(raw: bytes, path: Path, *, limit: int = MAX_ARRAYS_BYTES
-             ) -> dict[str, np.ndarray]:
-    """Every member of an in-memory ``.npz``, without pickle, each checked before it is read.
-
-    Parameters
-    ----------
-    raw : bytes
-        The file's bytes.
-    path : Path
-        Where they came from (for messages).
-    limit : int
-        Most bytes the members may hold uncompressed, together.
-
-    Returns
-    -------
-    dict of str to ndarray
-
-    Raises
-    ------
-    ArtifactError
-        If ``raw`` is not a zip of plain ``.npy`` members: a damaged zip or deflate
-        stream, a member not named ``*.npy`` or named twice, members declaring more than
-        ``limit`` bytes, an object dtype, or a header whose shape and dtype do not
-        account exactly for the member's bytes (so a forged ``(10**12,)`` header is
-        refused before numpy allocates 7 TiB).
-
-    Examples
-    --------
-    >>> read_npz(npz_bytes({"k": np.ones(2)}), Path("a.npz"))["k"].tolist()
-    [1.0, 1.0]
-    >>> read_npz(npz_bytes({"k": np.ones(2)}), Path("a.npz"), limit=100)
-    Traceback (most recent call last):
-    ...
-    ir.errors.ArtifactError: a.npz: the members declare 144 bytes uncompressed, over the \
-limit of 100 bytes; not an artifact radarsnn wrote (or one too large to load)
-    """
-    try:
-        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            infos = zf.infolist()
-            declared = sum(info.file_size for info in infos)
-            if declared > limit:
-                raise ArtifactError(f"{path}: the members declare {declared} bytes uncompressed, "
-                                    f"over the limit of {limit} bytes; not an artifact radarsnn "
-                                    "wrote (or one too large to load)")
-            arrays: dict[str, np.ndarray] = {}
-            for info in infos:
-                key = info.filename.removesuffix(".npy")
-                if key == info.filename or key in arrays:
-                    raise ArtifactError(f"{path}: member {info.filename!r} is "
-                                        + ("not a .npy array" if key == info.filename
-                                           else "repeated") + "; re-emit the artifact")
-                arrays[key] = _npy_member(zf.read(info), f"{path}: member {info.filename!r}")
-            return arrays
-    except ArtifactError:
-        raise
-    except _DAMAGE as exc:
-        raise ArtifactError(f"{path}: not a readable .npz of plain arrays "
-                            f"({type(exc).__name__}: {exc})") from exc
-
-
-def _npy_member(data: bytes, where: str) -> np.ndarray:
-    """One ``.npy`` member's array, after its header is checked against its bytes."""
-    fmt = np.lib.format
-    f = io.BytesIO(data)
-    version = fmt.read_magic(f)
-    if version not in ((1, 0), (2, 0)):
-        raise ArtifactError(f"{where}: .npy format version {version} is not one radarsnn "
-                            "writes (1.0 or 2.0)")
-    shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
-                       else fmt.read_array_header_2_0(f))
-    if dtype.hasobject:
-        raise ArtifactError(f"{where}: object arrays are refused (they load only with "
-                            "allow_pickle, which runs code)")
-    count = 1
-    for n in shape:
-        count *= n
-    need, have = count * dtype.itemsize, len(data) - f.tell()
-    if count < 0 or need != have:
-        raise ArtifactError(f"{where}: the header declares shape {short_repr(shape)} of "
-                            f"{dtype.str} ({need} bytes) but the member holds {have} bytes of "
-                            "data; re-emit the artifact")
-    f.seek(0)
-    return fmt.read_array(f, allow_pickle=False)
 
 
 def read_bytes(path: Path, *, limit: int = MAX_MANIFEST_BYTES) -> bytes:

@@ -37,7 +37,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ir.errors import BudgetError, CompileError
-from ir.evaluate import MAX_VALUE_BYTES, check_value_sizes
+from ir.limits import MAX_VALUE_BYTES, check_value_sizes
 
 __all__ = ["N_QUANTILES", "NodeCalibration", "Calibration", "measure", "Policy", "SYNTHETIC",
            "synthetic_inputs"]
@@ -273,7 +273,7 @@ def synthetic_inputs(graph, *, seed: int = 0,
         ``draw(rng, shape, complex) -> ndarray`` per domain (default :data:`SYNTHETIC`).
     max_memory_bytes : int or None
         Limit on the bytes of the inputs drawn, checked from their types first (default
-        :data:`ir.evaluate.MAX_VALUE_BYTES`; ``None``: no limit).
+        :data:`ir.limits.MAX_VALUE_BYTES`; ``None``: no limit).
 
     Returns
     -------

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
-from ir.evaluate import check_value_sizes
+from ir.limits import check_limit, check_value_sizes
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -154,8 +154,6 @@ def limits_from_options(options: Mapping[str, object] | None) -> tuple[int | Non
     ir.errors.CompileError: compile option: max_memory_bytes=-1 must be a positive finite number \
 of bytes, or None (no limit)
     """
-    from backends.reference.guards import check_limit
-
     options = options or {}
     return (check_limit("max_memory_bytes", options.get("max_memory_bytes", MAX_MEMORY_BYTES),
                         "bytes", where="compile option", error=CompileError),
@@ -189,7 +187,7 @@ def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYT
     IRError
         If the graph's types cannot be inferred.
     """
-    from backends.reference.guards import check_limit, human_bytes
+    from backends.reference.guards import human_bytes
 
     max_memory_bytes = check_limit("max_memory_bytes", max_memory_bytes, "bytes",
                                    where=f"chain {graph.name!r}", error=CompileError)

@@ -23,85 +23,21 @@ Examples
 
 from __future__ import annotations
 
-import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
 from ir.errors import IRError, RadarSNNError
 from ir.graph import Graph
 from ir.implementations import EVAL_REGISTRY, EvalRegistry, Implementation
+from ir.limits import MAX_VALUE_BYTES, check_value_sizes
 from ir.ops import (
     Op,
 )
 from ir.types import TensorType
 
-__all__ = ["EVAL_REGISTRY", "MAX_VALUE_BYTES", "EvalRegistry", "Implementation", "check_input",
-           "check_value_sizes", "eval_registry", "evaluate", "evaluate_node"]
-
-#: Default limit on the values :func:`evaluate` holds (it keeps every node's value): 8 GiB,
-#: like the compile and simulation guards.
-MAX_VALUE_BYTES = 8 << 30
-
-
-def check_value_sizes(graph: Graph, types: Mapping[str, TensorType], nodes: Iterable[str], *,
-                      max_memory_bytes: int | None, error: type[RadarSNNError] = IRError,
-                      doing: str = "evaluating") -> int:
-    """Refuse before anything is allocated when the values of ``nodes`` would not fit.
-
-    The sizes come from the inferred types alone (:attr:`TensorType.nbytes`), so a chain
-    whose ``n_fft`` is ``2**63`` or whose axis is ``2**62`` long is refused here, naming
-    the largest node, instead of failing inside numpy.
-
-    Parameters
-    ----------
-    graph : Graph
-        The chain (for its name and the nodes' ops).
-    types : mapping of str to TensorType
-        Its inferred types.
-    nodes : iterable of str
-        The nodes whose values are held together.
-    max_memory_bytes : int or None
-        The limit (``None``: no limit).
-    error : type of RadarSNNError
-        Raised over the limit (:class:`~ir.errors.IRError` by default).
-    doing : str
-        What needs the values, for the message.
-
-    Returns
-    -------
-    int
-        The values' total size in bytes.
-
-    Examples
-    --------
-    >>> g = Graph.from_dict({"nodes": [{"id": "x", "op": "input", "shape": {"a": 2**40}},
-    ...                                {"id": "o", "op": "output", "input": "x"}]})
-    >>> check_value_sizes(g, g.infer_types(), ["x"], max_memory_bytes=8 << 30)
-    Traceback (most recent call last):
-    ...
-    ir.errors.IRError: graph 'chain': evaluating needs 8.8e+12 bytes for the values (over \
-max_memory_bytes=8589934592); the largest is node 'x' (input), a {'a': 1099511627776} real \
-value of 8.8e+12 bytes; shrink its axes (or n_fft) or raise max_memory_bytes
-    """
-    sizes = {n: types[n].nbytes for n in nodes}
-    total = sum(sizes.values())
-    node = max(sizes, key=sizes.__getitem__, default=None)
-    if node is None:
-        return total
-    t = types[node]
-    if sizes[node] > sys.maxsize:  # whatever the limit: numpy cannot index it
-        raise error(f"graph {graph.name!r}: node {node!r} ({graph.op(node).op}) is a "
-                    f"{dict(t.axes)} value of {sizes[node]:.2g} bytes, more than any array can "
-                    f"hold ({sys.maxsize} bytes); shrink its axes (or n_fft)", node=node)
-    if max_memory_bytes is None or total <= max_memory_bytes:
-        return total
-    raise error(f"graph {graph.name!r}: {doing} needs {total:.2g} bytes for the values (over "
-                f"max_memory_bytes={max_memory_bytes}); the largest is node {node!r} "
-                f"({graph.op(node).op}), a {dict(t.axes)} {'complex' if t.complex else 'real'} "
-                f"value of {sizes[node]:.2g} bytes; shrink its axes (or n_fft) or raise "
-                "max_memory_bytes", node=node)
-
+__all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "eval_registry",
+           "evaluate", "evaluate_node"]
 
 def evaluate(
     graph: Graph,
@@ -124,7 +60,7 @@ def evaluate(
         Implementations that extend or override :data:`EVAL_REGISTRY`.
     max_memory_bytes : int or None
         Limit on the bytes of all the values together, from the types, checked before
-        anything is evaluated (default :data:`MAX_VALUE_BYTES`; ``None``: no limit).
+        anything is evaluated (default :data:`ir.limits.MAX_VALUE_BYTES`; ``None``: no limit).
 
     Returns
     -------

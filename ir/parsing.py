@@ -5,25 +5,19 @@ and the graph and report a program artifact stores are all parsed here, so the s
 bounds hold for every file:
 
 * **Nesting**: at most :data:`MAX_DEPTH` levels of sequences/mappings (arrays/objects),
-  aliases included.  Deeper documents are refused before anything recursive runs
-  (PyYAML's composer, ``json.loads``, pydantic and ``repr`` would otherwise raise
-  ``RecursionError``).
-* **Size after alias expansion** (YAML): at most :data:`MAX_YAML_NODES` nodes, each
-  alias counted as a copy of what it names.  A 500-byte "billion laughs" document
-  (``&a [..]``, ``&b [*a, *a, ..]``, ...) expands to 10⁹ nodes: it is refused by
-  counting, before it is composed.  A recursive alias (a node containing itself) is
-  refused too.  The count also bounds parse time, which grows with the nodes.
-* **Speed**: libyaml's C parser (``yaml.CSafeLoader``) where PyYAML was built with it.
+  aliases included, refused before anything recursive runs (PyYAML's composer,
+  ``json.loads``, pydantic and ``repr`` would raise ``RecursionError``).
+* **Size after alias expansion** (YAML): at most :data:`MAX_YAML_NODES` nodes, an alias
+  counted as a copy of what it names, so a 500-byte "billion laughs" (10⁹ nodes) is
+  refused by counting before it is composed; a recursive alias too.  The count also
+  bounds parse time, with libyaml's C parser (``yaml.CSafeLoader``) where available.
 * **Duplicate keys** are refused as *constructed* values, the way the mapping would
-  merge them (``1`` and ``1.0``, ``yes`` and ``true``, ``null`` and ``~``).
-* **Values** a constructor cannot build (an integer of more than 4 300 digits, a
-  timestamp ``2001-02-30``, ``!!int 0x``) are refused naming the line.
+  merge them (``1`` and ``1.0``, ``yes`` and ``true``, ``null`` and ``~``), and values
+  no constructor builds (4 301 digits, ``2001-02-30``, ``!!int 0x``) name their line.
 
-Reading never runs code: YAML with PyYAML's safe constructor only, JSON with
-:func:`json.loads`.  Syntax errors stay PyYAML's ``YAMLError`` and
-``json.JSONDecodeError`` (each caller words them); every bound is the caller's
-error class (``error=``), a :class:`~ir.errors.RadarSNNError`, whose message says
-which bound, the amount and the line, and how to fix the file.
+Reading never runs code: PyYAML's safe constructor, :func:`json.loads`.  Syntax errors
+stay ``yaml.YAMLError`` and ``json.JSONDecodeError`` (each caller words them); a bound
+raises the caller's error class (``error=``) saying which bound, the amount and the line.
 
 Examples
 --------
@@ -60,8 +54,8 @@ from ir.model import short_repr
 
 __all__ = ["MAX_DEPTH", "MAX_YAML_NODES", "YAML_LOADER", "json_depth", "load_json", "load_yaml"]
 
-#: Deepest nesting of sequences/mappings (YAML) or arrays/objects (JSON) read.  Chain
-#: files need 5 levels, artifact manifests and reports 6.
+#: Deepest nesting of sequences/mappings (YAML) or arrays/objects (JSON) read.  The example
+#: chains need 4 levels, a classifier's layers 6, artifact manifests 6, reports 4.
 MAX_DEPTH = 64
 #: Most YAML nodes (scalars, sequences, mappings) of one document, aliases expanded: about
 #: 47 000 chain nodes (a 3.3 MiB chain file); parsing this many takes a few seconds at
@@ -295,6 +289,15 @@ def load_json(text: str, *, error: _Error = ChainFileError, **kwargs: Any) -> An
     RadarSNNError
         ``error``: nested deeper than :data:`MAX_DEPTH`, or an integer of more than
         4 300 digits (Python refuses to convert it).
+
+    Examples
+    --------
+    >>> load_json('{"a": [1, "]]"]}')
+    {'a': [1, ']]']}
+    >>> load_json("1" * 5000)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ir.errors.ChainFileError: a number cannot be read (Exceeds the limit (4300 digits) ...
     """
     if json_depth(text) > MAX_DEPTH:
         raise error(f"line {_line_deeper_than(text, MAX_DEPTH)}: nested deeper than {MAX_DEPTH} "

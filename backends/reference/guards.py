@@ -55,8 +55,6 @@ ir.errors.SimulationError: network 'n': simulating 1000000000 frames would take 
 
 from __future__ import annotations
 
-import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 from math import prod
@@ -68,8 +66,8 @@ from backends.reference.closed_cost import (
     spikes_per_neuron,
 )
 from compiler.snn.network import SpikingNetwork
-from ir.errors import RadarSNNError, SimulationError
-from ir.model import short_repr
+from ir.errors import SimulationError
+from ir.limits import check_limit
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_UPDATES_PER_S", "STEP_OVERHEAD_S",
            "SYNAPSE_OPS_PER_S", "SimEstimate", "check_limit", "check_simulation",
@@ -133,49 +131,6 @@ def human_bytes(n: float) -> str:
         if n >= scale:
             return f"{n / scale:.3g} {unit}"
     return f"{int(n)} B"
-
-
-def check_limit(name: str, value: object, unit: str, *, where: str,
-                error: type[RadarSNNError] = SimulationError) -> int | float | None:
-    """A resource limit's value, refused unless it is a positive finite number or None.
-
-    A NaN limit would switch its guard off (every comparison with NaN is False) and a
-    string would fail deep in the guard with a ``TypeError``, so both are refused up front.
-
-    Parameters
-    ----------
-    name : str
-        The option (``max_memory_bytes``, ``max_time_s``, ...).
-    value : object
-        Its value; ``None`` means no limit.
-    unit : str
-        ``"bytes"`` (the value becomes an ``int``) or ``"s"`` (a ``float``).
-    where : str
-        Who takes the option, for the message (``"simulate"``, ``"compile option"``).
-    error : type of RadarSNNError
-        Raised for a bad value (:class:`~ir.errors.SimulationError` by default).
-
-    Returns
-    -------
-    int, float or None
-
-    Examples
-    --------
-    >>> check_limit("max_time_s", 60, "s", where="simulate")
-    60.0
-    >>> check_limit("max_memory_bytes", float("nan"), "bytes", where="simulate")
-    Traceback (most recent call last):
-    ...
-    ir.errors.SimulationError: simulate: max_memory_bytes=nan must be a positive finite number \
-of bytes, or None (no limit)
-    """
-    if value is None:
-        return None
-    if (isinstance(value, numbers.Real) and not isinstance(value, bool)
-            and math.isfinite(value) and value > 0):
-        return int(value) if unit == "bytes" else float(value)
-    raise error(f"{where}: {name}={short_repr(value)} must be a positive finite number of "
-                f"{unit}, or None (no limit)")
 
 
 def _nnz(proj) -> int:
@@ -263,7 +218,8 @@ def check_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "ste
     SimulationError
         Over a limit: the estimate, the limit, and the ways out (frames per call,
         ``record_spikes=False``, ``mode='closed'``, fewer time steps, a higher limit);
-        or a limit that is not a positive finite number or None (:func:`check_limit`).
+        or a limit that is not a positive finite number or None
+        (:func:`ir.limits.check_limit`).
     """
     where = f"network {network.name!r}"
     max_memory_bytes = check_limit("max_memory_bytes", max_memory_bytes, "bytes", where=where)

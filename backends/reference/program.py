@@ -26,14 +26,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S, check_limit
+from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.evaluate import check_input, check_value_sizes, eval_registry, evaluate_node
+from ir.evaluate import check_input, eval_registry, evaluate_node
+from ir.limits import check_limit, check_value_sizes
 from ir.model import short_repr
 
 __all__ = ["ProgramResult", "check_program", "program_plans", "run_program"]

@@ -13,7 +13,6 @@ from backends.reference.encoding import encode_inputs
 from backends.reference.guards import (
     MAX_MEMORY_BYTES,
     MAX_TIME_S,
-    check_limit,
     check_simulation,
     frames_in,
 )
@@ -23,6 +22,7 @@ from backends.reference.result import Activity, SimResult
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
+from ir.limits import check_limit
 
 if TYPE_CHECKING:
     from backends.reference.program import ProgramResult
