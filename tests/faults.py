@@ -118,3 +118,19 @@ def tree_bytes(root: Path) -> dict[str, bytes]:
 
 
 __all__ = ["DiskFull", "listing", "tree_bytes"]
+
+
+def fault_chain(name: str) -> tuple:
+    """A tiny chain (window, power, CA-CFAR over 8 cells) and its input, for save tests."""
+    import numpy as np
+
+    from ir import Graph
+
+    graph = Graph.from_dict({"name": name, "nodes": [
+        {"id": "a", "op": "input", "shape": {"range": 8}},
+        {"id": "w", "op": "window", "input": "a", "axis": "range", "kind": "hann"},
+        {"id": "m", "op": "magnitude", "input": "w", "kind": "square"},
+        {"id": "c", "op": "cfar", "input": "m", "kind": "ca", "guard": 0, "train": 1,
+         "alpha": 1.5},
+        {"id": "o", "op": "output", "input": "c"}]})
+    return graph, {"a": np.linspace(-1.0, 1.0, 8)}

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from faults import listing, tree_bytes
+from faults import fault_chain, listing, tree_bytes
 
 from backends import load, load_program, save, save_program
 from backends.artifact import read_manifest
@@ -28,16 +28,9 @@ from backends.manifest import HASH_KEY
 from backends.program_artifact import read_program_manifest
 from compiler.cli import main
 from compiler.compile import compile_graph
-from ir import Graph
 from ir.errors import ArtifactError
 
-GRAPH = Graph.from_dict({"name": "faults", "nodes": [
-    {"id": "a", "op": "input", "shape": {"range": 8}},
-    {"id": "w", "op": "window", "input": "a", "axis": "range", "kind": "hann"},
-    {"id": "m", "op": "magnitude", "input": "w", "kind": "square"},
-    {"id": "c", "op": "cfar", "input": "m", "kind": "ca", "guard": 0, "train": 1, "alpha": 1.5},
-    {"id": "o", "op": "output", "input": "c"}]})
-X = {"a": np.linspace(-1.0, 1.0, 8)}
+GRAPH, X = fault_chain("faults")
 
 
 @pytest.fixture(scope="module")

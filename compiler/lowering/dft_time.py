@@ -59,6 +59,7 @@ from compiler.lowering.stage_gains import (
     exact_weight_bits,
     gain_mechanism,
     gained_range,
+    integer_weight_bits,
     pow2_gains,
     stage_gains,
 )
@@ -303,10 +304,7 @@ def layer_weight_bits(ctx: LoweringContext, node: str) -> int:
     Lowering at the target's width keeps the quantize pass from re-scaling the layer
     (its thresholds and biases stay the whole numbers the schedule chose).
     """
-    option = ctx.option("weight_bits")
-    if option is None:
-        option = getattr(ctx.target, "weight_bits", None)
-    return weight_bits_of(option, node=node)
+    return weight_bits_of(integer_weight_bits(ctx), node=node)
 
 
 def _excess(ctx: LoweringContext, sched, top: float) -> float:

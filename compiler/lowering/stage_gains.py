@@ -61,7 +61,8 @@ from compiler.lowering.registry import HOST, LoweringRule
 from ir.errors import CompileError
 
 __all__ = ["STAGE_GAINS", "GAIN_MARGIN", "GAIN_FLOOR", "GAIN_CODE_SIGMAS", "NEURON_MIN_BIAS",
-           "exact_weight_bits", "gain_mechanism", "pow2_gains", "index_levels", "stage_gains",
+           "exact_weight_bits", "gain_mechanism", "integer_weight_bits", "pow2_gains",
+           "index_levels", "stage_gains",
            "gained_range"]
 
 #: Values of the ``stage_gains`` option (the first is the default): ``auto`` picks the
@@ -93,6 +94,20 @@ def exact_weight_bits(t_steps: int, n_rows: int) -> int:
     return min(32, 54 - math.ceil(math.log2(t_steps)) - math.ceil(math.log2(max(n_rows, 2))))
 
 
+def integer_weight_bits(ctx: LoweringContext) -> int | None:
+    """The integer weight width the layers are lowered for: option ``weight_bits``, else the
+    target's (None: exact weights).  The one place the option is read.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> integer_weight_bits(SimpleNamespace(option=lambda k, d=None: d,
+    ...                                     target=SimpleNamespace(weight_bits=8)))
+    8
+    """
+    return ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
+
+
 def gain_mechanism(ctx: LoweringContext) -> str | None:
     r"""How stage gains are applied: ``"weights"``, ``"neurons"`` or None (off).
 
@@ -120,8 +135,7 @@ def gain_mechanism(ctx: LoweringContext) -> str | None:
         return None
     if mode in ("weights", "neurons"):
         return mode
-    integer = ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
-    if not integer:
+    if not integer_weight_bits(ctx):
         return "weights"
     return "neurons" if getattr(ctx.target, "per_neuron_scales", True) else "weights"
 
@@ -210,8 +224,7 @@ def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_st
             return None
         ratio = levels.max() / (neuron_unit * t_steps * NEURON_MIN_BIAS)
     else:
-        bits = (ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
-                or exact_weight_bits(t_steps, n_rows))
+        bits = integer_weight_bits(ctx) or exact_weight_bits(t_steps, n_rows)
         ratio = 2.0 ** (bits - 1 - (math.ceil(math.log2(t_steps)) + 2))
     if ratio < 2:
         return None

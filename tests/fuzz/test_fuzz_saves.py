@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from faults import DiskFull, tree_bytes
+from faults import DiskFull, fault_chain, tree_bytes
 from fuzz_support import budget, expect_radarsnn_error
 from hypothesis import given, note
 from hypothesis import strategies as st
@@ -40,16 +40,9 @@ from backends.manifest import HASH_KEY
 from backends.program_artifact import is_program, read_program_manifest
 from compiler.compile import compile_graph
 from compiler.program import CompiledProgram
-from ir import Graph
 from ir.errors import ArtifactError
 
-GRAPH = Graph.from_dict({"name": "fuzz-saves", "nodes": [
-    {"id": "a", "op": "input", "shape": {"range": 8}},
-    {"id": "w", "op": "window", "input": "a", "axis": "range", "kind": "hann"},
-    {"id": "m", "op": "magnitude", "input": "w", "kind": "square"},
-    {"id": "c", "op": "cfar", "input": "m", "kind": "ca", "guard": 0, "train": 1, "alpha": 1.5},
-    {"id": "o", "op": "output", "input": "c"}]})
-X = {"a": np.linspace(-1.0, 1.0, 8)}
+GRAPH, X = fault_chain("fuzz-saves")
 TWO = compile_graph(GRAPH, target="loihi2", calibration_inputs=X, motifs={"w": "time"})
 ONE = compile_graph(GRAPH, target="loihi2", calibration_inputs=X)
 OBJECTS = {"program-2": TWO, "program-1": ONE, "network-a": TWO.networks[0],
