@@ -175,6 +175,23 @@ def test_stale_temporaries_of_dead_processes_are_removed_by_the_next_save(progra
     assert sorted(os.listdir(tmp_path)) == sorted(["art", "o.npz", live.name])
 
 
+def _slow_disk(delay_s: float) -> None:
+    """Make this (forked) process's directory syncs take ``delay_s`` longer, as on a slow disk.
+
+    On a RAM-backed ``/tmp`` a sync costs nothing and the temporary lives for a
+    sliver of each save, so random kills would rarely land while it exists.
+    """
+    import backends.atomic as atomic
+
+    sync = atomic._sync_tree
+
+    def slow(root: Path) -> None:
+        sync(root)
+        time.sleep(delay_s)
+
+    atomic._sync_tree = slow
+
+
 def _kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: int,
                        seed: int) -> list[str]:
     """Fork a child that saves ``versions`` in turn forever; SIGKILL it at random moments."""
@@ -192,17 +209,19 @@ def _kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: i
             code = 0
             try:
                 os.close(ready_r)
+                _slow_disk(period)
                 i = rng.randrange(2)
-                os.write(ready_w, b"1")  # saving starts now (a loaded machine may delay it)
+                save_one(versions[i % 2], target)  # warm: a fresh fork may start slowly
+                os.write(ready_w, b"1")  # saving in a loop now
                 while True:
-                    save_one(versions[i % 2], target)
                     i += 1
+                    save_one(versions[i % 2], target)
             except BaseException:  # noqa: BLE001 - reported to the parent by the exit code
                 code = 3
             finally:
                 os._exit(code)
         os.close(ready_w)
-        os.read(ready_r, 1)  # kill only a child that is saving
+        os.read(ready_r, 1)  # kill only a child that saves in its loop
         os.close(ready_r)
         time.sleep(rng.uniform(0.0, 3 * period))
         os.kill(pid, signal.SIGKILL)
