@@ -31,7 +31,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -76,6 +76,11 @@ class NodeCalibration:
         Per axis a linear consumer contracts (integer targets only): ``E[p pᵀ]`` of the
         ± part vectors along it, rows ``(index, part)`` — what
         :func:`compiler.quantize_weights.rint_feedback` rounds the layer's weights against.
+    frames : ndarray, optional
+        For a graph input measured on calibration inputs: the calibration values
+        themselves (frames first, after any ``per-input`` normalisation), for the
+        lowering's measured choices (:func:`compiler.lowering.dft_time.input_rounding`).
+        Compile-time only, like ``second_moments``.
     """
 
     node: str
@@ -93,6 +98,7 @@ class NodeCalibration:
     axis_quantiles: dict[str, tuple[float, ...]] = field(default_factory=dict)
     second_moments: dict[str, np.ndarray] = field(default_factory=dict, compare=False,
                                                   repr=False)
+    frames: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
     def max_part(self) -> float:
@@ -101,8 +107,9 @@ class NodeCalibration:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        d = asdict(self)
+        d = asdict(replace(self, second_moments={}, frames=None))
         d.pop("second_moments", None)  # compile-time only (matrices), not part of records
+        d.pop("frames", None)
         d["part_quantiles"] = list(self.part_quantiles)
         d["abs_quantiles"] = list(self.abs_quantiles)
         d["normalize_axes"] = list(self.normalize_axes)

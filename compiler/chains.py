@@ -65,7 +65,8 @@ def range_doppler_chain(config: RadarConfig, *, window: str = "hann",
     """
     shape = {"rx": config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
     nodes = [
-        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq)},
+        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
+         "full_scale": float(config.full_scale_code)},
         {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
         {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
          "keep": "all" if config.iq else "positive"},
@@ -111,7 +112,8 @@ def range_chain(config: RadarConfig, *, window: str = "hann", rx: int | None = N
     """
     shape = {"rx": rx or config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
     nodes = [
-        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq)},
+        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
+         "full_scale": float(config.full_scale_code)},
         {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
         {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
          "keep": "all" if config.iq else "positive"},

@@ -55,6 +55,10 @@ EXTRA_OPTIONS = {
     "headroom": "calibration headroom factor >= 1 (static policy)",
     "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
     "charging": "S-FT charging schedule: auto | constant | companding",
+    "input_rounding": "time-coded inputs: auto | nearest | dither (auto: dither where a later "
+                      "stage sums over another axis, e.g. chirps)",
+    "charging_guard": "host-decoded S-FT: values up to this factor above calibration are "
+                      "coded coarsely, not clipped (default 16; 1 = off)",
     "stage_gains": "time-coded S-FT: per-bin gains between linear stages, auto | none",
     "fft_radices": "radix sequence of the time-fft motif",
     "input_range": "assumed max |input| of rate/fft motifs without calibration",

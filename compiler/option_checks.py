@@ -62,6 +62,8 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
         isinstance(k, str) and _real(x) and x > 0 for k, x in v.items()),
         "a mapping of input node id to a finite number > 0"),
     "charging": (lambda v: isinstance(v, str), "a schedule name (auto, constant, companding)"),
+    "input_rounding": (lambda v: v in ("auto", "nearest", "dither"), "auto, nearest or dither"),
+    "charging_guard": (lambda v: _real(v) and v >= 1, "a finite number >= 1 (1: no guard)"),
     "stage_gains": (lambda v: isinstance(v, str), "auto or none"),
     "fft_radices": (lambda v: isinstance(v, list | tuple) and len(v) >= 1 and all(
         _int(r) and 2 <= r <= 1 << 16 for r in v), "a list of integer radices >= 2"),

@@ -34,6 +34,7 @@ CODES = {
     "even": LatencyCode(t_max=8, x_min=0.0, x_max=1.0),
     "odd": LatencyCode(t_min=1, t_max=9, x_min=0.0, x_max=1.0),
     "floor": LatencyCode(t_max=8, x_min=0.0, x_max=1.0, rounding="floor"),
+    "dither": LatencyCode(t_max=8, x_min=0.0, x_max=1.0, rounding="dither"),
     "log": LatencyCode(kind="log", t_max=4, x_min=1.0, x_max=16.0),  # x* = 16·√2
     "rate": RateCode(x_min=0.0, x_max=1.0, max_rate=0.5),  # 10 steps: 5 spikes at x_max
     "threshold": LatencyCode(t_max=1, x_min=0.5, x_max=1.5, rounding="floor"),
@@ -64,6 +65,7 @@ def packages(tmp_path_factory):
     ("even", [1.0, 1.0625, 1.0626], [False, False, True]),
     ("odd", [1.0, 1.0624, 1.0625], [False, False, True]),
     ("floor", [1.0, 1.0 + 1e-12, -5.0], [False, True, False]),
+    ("dither", [1.0, 1.0 + 1e-12, -5.0], [False, True, False]),  # floor(t + u), u may be 0
     ("log", [22.6, 22.7, 0.5], [False, True, False]),
     ("rate", [1.1, 1.2, -3.0], [False, True, False]),  # 1.2: floor(6.0) = 6 spikes > 5
     ("threshold", [1e9, -1e9, 0.0], [False, False, False]),

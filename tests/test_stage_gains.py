@@ -150,7 +150,8 @@ def test_each_bin_within_its_own_step(seed: int, strong: float) -> None:
     cal = strong + rng.normal(size=(N_CHIRPS, N_SAMPLES))
     p = compile_rd(rd_graph(), cal)
     enc = p.networks[0].encoders[0]
-    z = enc.code.value_of(enc.code.spike_steps(split_values(x, enc.split)))  # (chirp, n, 2)
+    parts_in = split_values(x, enc.split)  # (chirp, n, 2); the encoder sees one flat frame
+    z = enc.code.value_of(enc.code.spike_steps(parts_in.reshape(1, -1)).reshape(parts_in.shape))
     m = real_weights(dft_matrix(N_SAMPLES, keep="positive"), "signed", "re_im_signed")
     want = np.maximum(z.reshape(N_CHIRPS, -1) @ m, 0.0).reshape(N_CHIRPS, -1, 4)
     parts, half, top = _range_values(p, x)

@@ -36,6 +36,7 @@ from backends.emit.render import Code, comment, ident, indent, join, lit, render
 from backends.manifest import radarsnn_version
 from backends.reference.guards import check_simulation
 from backends.reference.plan import build_plan
+from backends.reference.units import normalized_inputs, unit_plan
 from compiler.program import CompiledProgram, Segment
 from compiler.snn.network import SpikingNetwork
 from ir.errors import ArtifactError, CompileError
@@ -178,6 +179,11 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
                                "$c, $d)",
                                n=lit(node), s=lit(tuple(t.shape)), c=lit(bool(t.complex)),
                                d=lit(t.domain)))
+        per_input = normalized_inputs(program)  # the per-input policy: run as calibrated
+        if per_input:
+            spec = tuple((n, tuple(types[n].names.index(a) for a in ax))
+                         for n, ax in sorted(per_input.items()))
+            body.append(render("peaks = _kernels.normalize_inputs(values, $spec)", spec=lit(spec)))
     else:
         body.append(render("values.update(inputs)"))
     for seg in segments:
@@ -209,6 +215,11 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
               else [e.port for e in networks[0].encoders])
     outputs = (program.graph.output_ids() if program is not None
                else [d.port for d in networks[0].decoders])
+    if program is not None:
+        units, _ = unit_plan(program, types, list(outputs))
+        if units:
+            body.append(render("_kernels.apply_units(values, peaks, $plan)", plan=lit(
+                tuple((node, *step) for node, step in sorted(units.items())))))
     files["program.py"] = render(template("program.py.tmpl"), header=header,
                                  chain=comment(chain), imports=render(
                                      "\n$i", i=import_from(sorted(imports))),

@@ -176,6 +176,8 @@ def encode_function(pkg: PackageBuilder, module: str, enc: Encoder, pop: Populat
                     t_span=lit(code.t_max - code.t_min), t0=lit(code.t_min))
         lines.append(render("t = ($hi - x) / $span * $t_span", **ramp) if code.t_min == 0 else
                      render("t = $t0 + ($hi - x) / $span * $t_span", **ramp))
+        if code.rounding == "dither":
+            lines.append(render("t = t + _kernels.dither_offsets(t.shape[-1])"))
         lines.append(render("steps = np.rint(t).astype(np.int64)") if code.rounding == "nearest"
                      else render("steps = np.floor(t).astype(np.int64)"))
         lines.append(render("return _kernels.latency_train(steps, $limit, $n)",
@@ -205,7 +207,7 @@ def _range_check(enc: Encoder, n_steps: int) -> Code:
     if isinstance(code, LatencyCode):
         if code.t_max - code.t_min <= 1:
             bad = render("np.zeros(parts.shape, bool)")
-        elif code.rounding == "floor":
+        elif code.rounding in ("floor", "dither"):
             bad = render("parts > $hi", hi=lit(float(code.x_max)))
         else:
             edge = code.t_min - 0.5

@@ -129,7 +129,7 @@ def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
     if code.type == "latency":
         if code.t_max - code.t_min <= 1:  # a threshold: every value has its meaning
             bad = np.zeros(parts.shape, bool)
-        elif code.rounding == "floor":
+        elif code.rounding in ("floor", "dither"):  # dither: floor(t + u), u may be 0
             bad = parts > code.x_max
         else:
             edge = code.t_min - 0.5

@@ -31,6 +31,7 @@ from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.simulate import simulate
+from backends.reference.units import apply_units, normalize_inputs, normalized_inputs, unit_plan
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
 from ir.evaluate import check_input, eval_registry, evaluate_node
@@ -52,11 +53,19 @@ class ProgramResult:
         The values of the graph's ``output`` nodes.
     simulations : list of SimResult
         One per spiking segment, in order (spike and synaptic-event counts).
+    normalized : list of str
+        Under the ``per-input`` policy, the nodes whose values stay in normalised units
+        (:mod:`backends.reference.units`: more than one normalised input); every other
+        value is in the units of the inputs.
+    input_peaks : dict of str to ndarray
+        Under ``per-input``, each normalised input's per-slice peak (the factor undone).
     """
 
     values: dict[str, np.ndarray]
     outputs: dict[str, np.ndarray]
     simulations: list[SimResult] = field(default_factory=list)
+    normalized: list[str] = field(default_factory=list)
+    input_peaks: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def spike_counts(self) -> dict[str, int]:
@@ -265,6 +274,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
         doing="running the program")
     values = {k: check_input(k, types[k], v) for k, v in inputs.items()}
+    per_input = normalized_inputs(program)  # the per-input policy: run as calibrated
+    values, peaks = normalize_inputs(values, per_input, {k: types[k].names for k in per_input})
     impls = eval_registry(program.evaluators)
     decoded: set[str] = set()  # nodes whose value went through a spiking segment's decoder
     sims = []
@@ -291,5 +302,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                                              impls)
             if decoded.intersection(seg.inputs):
                 decoded.add(seg.node)
+    plan, left = unit_plan(program, types, list(values))
+    values = apply_units(values, peaks, plan)
     outputs = {k: values[k] for k in graph.output_ids()}
-    return ProgramResult(values=values, outputs=outputs, simulations=sims)
+    return ProgramResult(values=values, outputs=outputs, simulations=sims, normalized=left,
+                         input_peaks=peaks)

@@ -47,7 +47,8 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, replace
 
 import networkx as nx
 import numpy as np
@@ -61,9 +62,9 @@ from compiler.snn.coding import normalize_values
 from ir import Graph
 from ir.errors import CompileError
 from ir.evaluate import evaluate
-from ir.ops import DFT, Linear, Sum, Window
+from ir.ops import DFT, AdcInput, Linear, Magnitude, Sum, Window
 
-__all__ = ["Calibrate", "mixed_axes"]
+__all__ = ["Calibrate", "CalibrationWarning", "adc_full_scales", "mixed_axes"]
 
 _POLICIES = ("static", "per-input")
 
@@ -82,6 +83,29 @@ def mixed_axes(graph: Graph, node: str) -> tuple[str, ...]:
     below = nx.descendants(graph.to_networkx(), node)
     mixed = {graph.op(n).axis for n in below if isinstance(graph.op(n), DFT | Linear | Sum)}
     return tuple(a for a in axes if a in mixed)
+
+
+class CalibrationWarning(UserWarning):
+    """A compile whose ranges are a worst case, not measured (no calibration data)."""
+
+
+def adc_full_scales(graph: Graph) -> dict[str, float]:
+    """``{adc input: full scale}`` for the ``adc_input`` nodes that declare one.
+
+    The default bounds of a static compile without calibration data: every stage's
+    range is propagated from the ADC's full scale, so nothing a real capture holds
+    can exceed it (the price: a scene far below full scale uses few of the code's
+    levels, ``docs/fourier.md``).
+
+    Examples
+    --------
+    >>> from compiler.chains import range_doppler_chain
+    >>> from radar.config import preset
+    >>> adc_full_scales(range_doppler_chain(preset("carrada")))
+    {'adc': 32768.0}
+    """
+    return {n: float(op.full_scale) for n in graph.input_ids()
+            if isinstance(op := graph.op(n), AdcInput) and op.full_scale is not None}
 
 
 def _frames(graph: Graph, inputs: dict) -> tuple[list[dict[str, np.ndarray]], int]:
@@ -117,6 +141,11 @@ def _propagate(graph: Graph, bounds: dict[str, float]) -> dict[str, NodeCalibrat
         elif isinstance(op, DFT | Linear) and args[0] in out:
             w = op_weights(op, types[args[0]].axes[op.axis], node=node)
             out[node] = float((np.abs(w.real) + np.abs(w.imag)).sum(axis=1).max()) * out[args[0]]
+        elif isinstance(op, Magnitude) and args[0] in out:  # parts bounded by b
+            b, n = out[args[0]], 2 if types[args[0]].complex else 1
+            out[node] = {"l2": math.sqrt(n) * b, "l1": n * b, "square": n * b * b}[op.kind]
+        elif isinstance(op, Sum) and args[0] in out:
+            out[node] = types[args[0]].axes[op.axis] * out[args[0]]
     return {n: NodeCalibration(node=n, max_re=b, max_im=b if types[n].complex else 0.0,
                                max_abs=b * (math.sqrt(2) if types[n].complex else 1.0),
                                max_l1=2 * b if types[n].complex else b, min=-b, max=b,
@@ -184,10 +213,20 @@ class Calibrate(Pass):
                                 axes=types[n].names) for n, v in per_node.items()}
             if getattr(ctx.target, "weight_bits", None) is not None:
                 _add_second_moments(graph, types, per_node, nodes)
+            for n in graph.input_ids():  # compile-time only: the lowering's measured choices
+                if n in per_node and n in nodes:
+                    nodes[n] = replace(nodes[n], frames=np.stack(per_node[n]))
             source = "inputs"
         else:
             bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"
-                      else dict(ctx.options.get("input_bounds") or {}))
+                      else dict(ctx.options.get("input_bounds") or {}) or adc_full_scales(graph))
+            if bounds and policy == "static" and not ctx.options.get("input_bounds"):
+                warnings.warn(
+                    f"calibrate: no calibration data; every range is bounded from the ADC full "
+                    f"scale of {', '.join(f'{k!r} ({v:g})' for k, v in bounds.items())} — a worst "
+                    "case: a scene far below full scale keeps few code levels (docs/fourier.md); "
+                    "give calibration_inputs (CLI: -c) for a usable chain",
+                    CalibrationWarning, stacklevel=2)
             nodes = _propagate(graph, bounds)
             nodes = {n: c if n not in norm else
                      NodeCalibration(**{**c.__dict__, "normalize_axes": norm[n]})

@@ -59,6 +59,7 @@ __all__ = [
     "split_values",
     "combine_parts",
     "normalize_values",
+    "dither_offsets",
     "N_PARTS",
 ]
 
@@ -84,8 +85,12 @@ class LatencyCode(_Frozen):
         a spike at ``T`` is not emitted).
     x_min, x_max : float
         The encoded range; values outside it are clipped.
-    rounding : {"nearest", "floor"}
-        How the real-valued time becomes a step.
+    rounding : {"nearest", "floor", "dither"}
+        How the real-valued time becomes a step; ``dither``: ``floor(t + u_i)`` with
+        a fixed offset ``u_i ∈ [0, 1)`` per position ``i`` of the last axis
+        (:func:`dither_offsets`) — unbiased (the mean over ``u`` is ``t``), and a
+        value repeated at many positions (the static part of a signal over
+        chirps) gets independent rounding errors instead of one repeated error.
     """
 
     type: Literal["latency"] = "latency"
@@ -94,7 +99,7 @@ class LatencyCode(_Frozen):
     t_max: int = Field(gt=0)
     x_min: float
     x_max: float
-    rounding: Literal["nearest", "floor"] = "nearest"
+    rounding: Literal["nearest", "floor", "dither"] = "nearest"
 
     @model_validator(mode="after")
     def _ranges(self) -> LatencyCode:
@@ -117,9 +122,13 @@ class LatencyCode(_Frozen):
     def spike_steps(self, x: np.ndarray) -> np.ndarray:
         """Integer spike steps; ``t_max`` means no spike inside the window.
 
-        Rounding ``nearest`` is half-to-even (numpy's ``rint``).
+        Rounding ``nearest`` is half-to-even (numpy's ``rint``); ``dither`` offsets each
+        position of the last axis (the encoders pass ``(frames, values)``, a frame's
+        parts flattened in C order).
         """
         t = self.spike_times(x)
+        if self.rounding == "dither":
+            t = t + dither_offsets(t.shape[-1] if t.ndim else 1).reshape(t.shape[-1:])
         steps = np.rint(t) if self.rounding == "nearest" else np.floor(t)
         return steps.astype(np.int64)
 
@@ -416,3 +425,32 @@ def combine_parts(y: np.ndarray, combine: Split) -> np.ndarray:
     if combine == "signed":
         return y[..., 0] - y[..., 1]
     return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
+
+
+def dither_offsets(n: int) -> np.ndarray:
+    r"""The fixed dither offsets ``u_0 … u_{n−1} ∈ [0, 1)`` of ``rounding="dither"``.
+
+    ``u_i`` is the top 53 bits of SplitMix64's output for ``i`` (a bijective integer
+    hash: the same numbers in any language and numpy version, no random state), so
+    the offsets are uniform and uncorrelated between positions.  Re-quantising a
+    signal that is already on a grid (ADC codes) with a step that is not a divisor
+    of its LSB rounds the part that repeats over chirps the same way in every
+    chirp; the chirp sum (the Doppler DFT's zero bin) then adds those errors
+    coherently into false zero-Doppler peaks.  With the offsets the error of each
+    sample is uniform on ``(−s, s)`` and independent of the value (non-subtractive
+    dither: error power ``s²/6`` instead of ``s²/12``, but white).
+
+    Examples
+    --------
+    >>> u = dither_offsets(100_000)
+    >>> bool(u.min() >= 0 and u.max() < 1), round(float(u.mean()), 2)
+    (True, 0.5)
+    >>> dither_offsets(3).round(4).tolist()
+    [0.8833, 0.4315, 0.0264]
+    """
+    with np.errstate(over="ignore"):
+        z = (np.arange(n, dtype=np.uint64) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15)
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = z ^ (z >> np.uint64(31))
+    return (z >> np.uint64(11)).astype(np.float64) * 2.0 ** -53

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import ClassVar, Literal
 
-from pydantic import Field, PositiveInt, model_validator
+from pydantic import Field, PositiveFloat, PositiveInt, model_validator
 
 from ir.model import Name
 from ir.ops.base import Op
@@ -23,6 +23,10 @@ class AdcInput(Op):
         Axis name -> size in array order, e.g. ``{"rx": 4, "chirp": 64, "sample": 256}``.
     complex : bool, default False
         True for I/Q (complex baseband) capture, False for real-only ADCs.
+    full_scale : float, optional
+        The ADC's full scale per rail in the input's units (``2**(adc_bits - 1)``
+        codes): no sample exceeds it.  Without calibration data the ``calibrate``
+        pass bounds every stage from it (``docs/fourier.md``).
 
     Notes
     -----
@@ -39,6 +43,7 @@ class AdcInput(Op):
     op: Literal["adc_input"] = "adc_input"
     shape: dict[Name, PositiveInt] = Field(min_length=1)
     complex: bool = False
+    full_scale: PositiveFloat | None = None
 
     def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
         self.expect_inputs(node_id, inputs)
