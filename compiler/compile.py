@@ -16,9 +16,9 @@ Examples
 ...     {"id": "o", "op": "output", "input": "a"}]})
 >>> program = compile_graph(g)                 # for loihi2, the default target
 >>> [s.kind for s in program.segments], list(program.records["timings"])[:4]
-(['host'], ['verify', 'fuse-linear', 'calibrate', 'lower'])
+(['host'], ['verify', 'fuse-linear', 'static-split', 'calibrate'])
 >>> sorted(compile_graph(g, target=None).records["timings"])  # no allocation passes
-['calibrate', 'fuse-linear', 'lower', 'verify']
+['calibrate', 'fuse-linear', 'lower', 'static-split', 'verify']
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from compiler.passes.place import Place
 from compiler.passes.quantize import Quantize
 from compiler.passes.report import ReportPass
 from compiler.passes.split import Split
+from compiler.passes.static_split import StaticSplit
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError
@@ -57,6 +58,8 @@ EXTRA_OPTIONS = {
     "charging": "S-FT charging schedule: auto | constant | companding",
     "input_rounding": "time-coded inputs: auto | nearest | dither (auto: dither where a later "
                       "stage sums over another axis, e.g. chirps)",
+    "static_split": "range-Doppler chains: the part repeating over chirps on the host, "
+                    "auto | off",
     "charging_guard": "host-decoded S-FT: values up to this factor above calibration are "
                       "coded coarsely, not clipped (default 16; 1 = off)",
     "stage_gains": "time-coded S-FT: per-bin gains between linear stages, auto | none",
@@ -78,7 +81,7 @@ EXTRA_OPTIONS = {
 
 def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
     """The passes ``compile_graph`` runs, in order (the allocation passes need a target)."""
-    passes: list[Pass] = [Verify(), FuseLinear(), Calibrate(), Lower()]
+    passes: list[Pass] = [Verify(), FuseLinear(), StaticSplit(), Calibrate(), Lower()]
     if hardware:
         passes += [Quantize(), Split(), Place(), ReportPass()]
     return passes

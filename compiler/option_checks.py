@@ -63,6 +63,7 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
         "a mapping of input node id to a finite number > 0"),
     "charging": (lambda v: isinstance(v, str), "a schedule name (auto, constant, companding)"),
     "input_rounding": (lambda v: v in ("auto", "nearest", "dither"), "auto, nearest or dither"),
+    "static_split": (lambda v: v in ("auto", "off"), "auto or off"),
     "charging_guard": (lambda v: _real(v) and v >= 1, "a finite number >= 1 (1: no guard)"),
     "stage_gains": (lambda v: isinstance(v, str), "auto or none"),
     "fft_radices": (lambda v: isinstance(v, list | tuple) and len(v) >= 1 and all(

@@ -26,6 +26,7 @@ from ir.errors import IRError
 from ir.ops import (
     CFAR,
     DFT,
+    Add,
     Classifier,
     Cluster,
     Linear,
@@ -86,6 +87,10 @@ def _log(node_id: str, op: Log, args: list, types: list) -> np.ndarray:
     from radar.dsp import to_db
 
     return to_db(args[0], domain=types[0].domain, floor_db=op.floor_db)
+
+
+def _add(node_id: str, op: Add, args: list, types: list) -> np.ndarray:
+    return args[0] + args[1]
 
 
 def _cfar(node_id: str, op: CFAR, args: list, types: list) -> np.ndarray:
@@ -160,6 +165,7 @@ EVAL_REGISTRY: dict[type[Op], Implementation] = {
     Sum: _sum,
     Magnitude: _magnitude,
     Log: _log,
+    Add: _add,
     CFAR: _cfar,
     Threshold: _threshold,
     Output: _output,

@@ -11,7 +11,7 @@ Examples
 >>> schema["required"], sorted(schema["properties"])
 (['nodes'], ['name', 'nodes'])
 >>> sorted(schema["properties"]["nodes"]["items"]["discriminator"]["mapping"])[:3]
-['adc_input', 'cfar', 'classifier']
+['adc_input', 'add', 'cfar']
 """
 
 from __future__ import annotations

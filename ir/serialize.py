@@ -136,8 +136,8 @@ def graph_from_dict(data: Mapping[str, Any], *, registry: OpRegistry | None = No
     Traceback (most recent call last):
     ...
     ir.errors.ChainFileError: chain 'chain', node 'w': unknown op 'windw'; valid ops: \
-adc_input, cfar, classifier, cluster, dft, input, linear, log, magnitude, output, sum, threshold, \
-track, window (an op defined in Python is known to readers given its class, \
+adc_input, add, cfar, classifier, cluster, dft, input, linear, log, magnitude, output, sum, \
+threshold, track, window (an op defined in Python is known to readers given its class, \
 Graph.from_yaml(..., registry={**ir.OP_REGISTRY, 'windw': ItsClass}); program artifacts and the \
 radarsnn command know the built-in ops only; docs/howto-op.md)
     """

@@ -100,7 +100,7 @@ def _frames(noise: float, n: int, seed: int) -> np.ndarray:
 def test_input_rounding_is_measured_on_the_calibration_frames(noise: float, want: str) -> None:
     cal = _frames(noise, 2, seed=1)
     program = compile_graph(_static_chain(), "loihi2", calibration_inputs={"adc": cal},
-                            time_steps=48)
+                            time_steps=48, options={"static_split": "off"})
     (enc,) = [e for net in program.networks for e in net.encoders if e.port == "adc"]
     assert enc.code.rounding == want
     s = enc.code.x_max / enc.code.t_max
@@ -117,7 +117,8 @@ def test_dither_removes_the_zero_doppler_spur_of_a_static_signal() -> None:
     spur = {}
     for mode in ("nearest", "dither"):
         program = compile_graph(_static_chain(), "loihi2", calibration_inputs={"adc": cal},
-                                time_steps=48, options={"input_rounding": mode})
+                                time_steps=48,
+                                options={"input_rounding": mode, "static_split": "off"})
         y = run_program(program, {"adc": frame}, out_of_range="clip").outputs["o"]
         err = np.abs(y - ref)
         spur[mode] = float(err[0].max() / np.median(err[1:]))  # zero Doppler vs the others

@@ -137,8 +137,8 @@ def max_part_error(a: np.ndarray, b: np.ndarray) -> float:
 def test_worked_example_compiles_with_calibration_and_runs(motif: str) -> None:
     graph = scaled_chain(0.5)
     program = compile_scaled(graph, motif)
-    assert list(program.records["timings"])[:4] == ["verify", "fuse-linear", "calibrate",
-                                                   "lower"]
+    assert list(program.records["timings"])[:5] == ["verify", "fuse-linear", "static-split",
+                                                   "calibrate", "lower"]
     assert program.records["calibrate"].source == "inputs"
     # the Nyquist tone (-1)^n puts all N = 8 in bin 4: 0.5·8 (bins 1-3 hold 4 each)
     assert program.records["calibrate"].nodes["half"].max_part == pytest.approx(4.0)

@@ -52,7 +52,8 @@ def _strong_and_weak(seed: int) -> np.ndarray:
 def test_two_stage_sft_with_stage_gains_matches_the_reference(charging, kind, tmp_path):
     x = _strong_and_weak(0)
     program = compile_graph(_range_doppler(), None, calibration_inputs={"x": x},
-                            time_steps=32, options={"charging": charging})
+                            time_steps=32,
+                            options={"charging": charging, "static_split": "off"})
     (net,) = program.networks
     assert net.meta["stage_gains"]["rng"]["axis"] == "range"  # default stage_gains="auto"
     (dec,) = net.decoders

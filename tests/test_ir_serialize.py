@@ -109,9 +109,9 @@ def test_schema_is_a_discriminated_union_requiring_op_and_id() -> None:
         ({"nodes": ["x"]}, r"node #0: must be a mapping with 'id' and 'op'", None),
         ({"nodes": [{"op": "input"}]}, r"node #0: missing 'id'", None),
         ({"nodes": [{"id": "2x", "op": "input"}]}, r"node #0: malformed id '2x'", None),
-        ({"nodes": [{"id": "x"}]}, r"node 'x': missing 'op'; valid ops: adc_input, cfar", "x"),
+        ({"nodes": [{"id": "x"}]}, r"node 'x': missing 'op'; valid ops: adc_input, add, cfar", "x"),
         ({"nodes": [{"id": "x", "op": "fft"}]},
-         r"node 'x': unknown op 'fft'; valid ops: adc_input, cfar, classifier, cluster, dft, "
+         r"node 'x': unknown op 'fft'; valid ops: adc_input, add, cfar, classifier, cluster, dft, "
          r"input, linear, log, magnitude, output, sum, threshold, track, window", "x"),
         ({"nodes": [{"id": "o", "op": "output", "input": "a", "inputs": ["a"]}]},
          "give 'input' .* or 'inputs' .*, not both", "o"),

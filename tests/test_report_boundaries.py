@@ -116,12 +116,12 @@ def test_tracking_chain_compiles_into_spiking_and_host_segments_and_runs() -> No
     det = next(r for r in rows if r["node"] == "det")
     assert (det["kind"], det["to"], det["bits_per_value"], det["values_per_frame"]) == (
         "spiking→host", "host:clu", 1, 16 * 32)
-    assert rows[0]["node"] == "adc" and rows[0]["bits_per_value"] == 32
+    assert rows[0]["node"] == "adc__moving" and rows[0]["bits_per_value"] == 32
     assert all(r["from"] != r["to"] for r in rows)
     report = build_report(program)
     assert report.data["boundaries"] == rows
     assert "## Segment boundaries" in report.to_markdown()
-    assert json.loads(report.to_json())["boundaries"][0]["node"] == "adc"
+    assert json.loads(report.to_json())["boundaries"][0]["node"] == "adc__moving"
 
 
 def test_a_spiking_motif_for_a_host_only_op_is_refused_naming_the_node() -> None:

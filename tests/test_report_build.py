@@ -123,7 +123,7 @@ def test_carrada_chain_reports_on_loihi_from_the_cli(capsys):
     rows = {r["node"]: r for r in data["stages"]}
     # rng (256 repetitions) and dop (1 024) multiplexed; the OS-CFAR stays spatial (Table 3)
     assert [(n, r["repetitions"], r["multiplexed"]) for n, r in rows.items()] == [
-        ("rng", 256, True), ("dop", 1024, True), ("det", 1, False)]
+        ("rng__moving", 256, True), ("dop__moving", 1024, True), ("det", 1, False)]
     # Table 3's 16 384 x 177 synapses, plus one split term per CUT whose clipped-edge rank
     # k_eff is odd and above 127 (an 8-bit mantissa with one exponent cannot hold it): 768
     assert (rows["det"]["neurons"], rows["det"]["synapses"]) == (16_384, 2_899_968 + 768)

@@ -205,9 +205,9 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
         else:
             op = program.graph.op(seg.node)
             module = emit_host(pkg, seg.node, op, types[seg.inputs[0]])
-            body.append(render("node = $n\nsource = $i\nvalues[node] = $m.compute(values[source])",
-                               n=lit(seg.node),
-                               m=ident(module), i=lit(seg.inputs[0])))
+            body.append(render("node = $n\nsources = $i\n"
+                               "values[node] = $m.compute(*(values[s] for s in sources))",
+                               n=lit(seg.node), m=ident(module), i=lit(tuple(seg.inputs))))
             if decoded.intersection(seg.inputs):
                 decoded.add(seg.node)
         imports.add(module)

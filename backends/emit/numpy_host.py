@@ -19,7 +19,7 @@ import numpy as np
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, indent, join, lit, render, template
 from ir.errors import CompileError
-from ir.ops import CFAR, DFT, Linear, Log, Magnitude, Op, Output, Sum, Threshold, Window
+from ir.ops import CFAR, DFT, Add, Linear, Log, Magnitude, Op, Output, Sum, Threshold, Window
 from ir.types import TensorType
 from radar.cfar_window import _mask, effective_k, training_counts
 from radar.dsp import dft_bins
@@ -137,6 +137,10 @@ def _cfar(pkg: PackageBuilder, module: str, node: str, op: CFAR, t: TensorType) 
         alpha=lit(float(op.alpha_for(win.n_train))), **geometry)
 
 
+def _add(pkg: PackageBuilder, module: str, node: str, op: Add, t: TensorType) -> Code:
+    return render("return x + y")
+
+
 def _output(pkg: PackageBuilder, module: str, node: str, op: Output, t: TensorType) -> Code:
     return render("return x")
 
@@ -149,6 +153,7 @@ HOST_EMITTERS: dict[type[Op], HostEmitter] = {
     Sum: _sum,
     Magnitude: _magnitude,
     Log: _log,
+    Add: _add,
     Threshold: _threshold,
     CFAR: _cfar,
     Output: _output,

@@ -62,7 +62,7 @@ from compiler.snn.coding import normalize_values
 from ir import Graph
 from ir.errors import CompileError
 from ir.evaluate import evaluate
-from ir.ops import DFT, AdcInput, Linear, Magnitude, Sum, Window
+from ir.ops import DFT, AdcInput, Add, Linear, Magnitude, Sum, Window
 
 __all__ = ["Calibrate", "CalibrationWarning", "adc_full_scales", "mixed_axes"]
 
@@ -144,6 +144,8 @@ def _propagate(graph: Graph, bounds: dict[str, float]) -> dict[str, NodeCalibrat
         elif isinstance(op, Magnitude) and args[0] in out:  # parts bounded by b
             b, n = out[args[0]], 2 if types[args[0]].complex else 1
             out[node] = {"l2": math.sqrt(n) * b, "l1": n * b, "square": n * b * b}[op.kind]
+        elif isinstance(op, Add) and all(a in out for a in args):
+            out[node] = out[args[0]] + out[args[1]]
         elif isinstance(op, Sum) and args[0] in out:
             out[node] = types[args[0]].axes[op.axis] * out[args[0]]
     return {n: NodeCalibration(node=n, max_re=b, max_im=b if types[n].complex else 0.0,

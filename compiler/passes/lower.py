@@ -5,7 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from compiler.lowering import LoweringContext, default_registry, lower_graph
+from compiler.lowering.registry import HOST
 from compiler.passes.base import CompileContext, Pass
+from compiler.passes.static_split import host_nodes
 from compiler.program import CompiledProgram
 
 __all__ = ["Lower"]
@@ -35,7 +37,12 @@ class Lower(Pass):
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         registry = ctx.lowering or default_registry()
         calibration = program.records.get("calibrate") or {}
-        lctx = LoweringContext(graph=program.graph, registry=registry, options=ctx.options,
+        options = ctx.options
+        pinned = host_nodes(program.records.get("static-split") or [])
+        if pinned:  # the static split's host path (and the moving input) run on the host
+            options = {**options, "motifs": {**dict.fromkeys(pinned, HOST),
+                                             **(options.get("motifs") or {})}}
+        lctx = LoweringContext(graph=program.graph, registry=registry, options=options,
                                calibration=getattr(calibration, "nodes", calibration),
                                target=ctx.target)
         program.segments = lower_graph(lctx)

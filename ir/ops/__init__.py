@@ -17,7 +17,7 @@ from __future__ import annotations
 from ir.ops.base import Op
 from ir.ops.classify import Classifier
 from ir.ops.compare import CFAR, CfarWindow, EdgeMode, Threshold
-from ir.ops.elementwise import Log, Magnitude, MagnitudeKind
+from ir.ops.elementwise import Add, Log, Magnitude, MagnitudeKind
 from ir.ops.host import CLUSTER_FEATURES, TRACK_STATE, Cluster, Track
 from ir.ops.io import AdcInput, Input, Output
 from ir.ops.linear import DFT, Linear, Sum, Window, WindowKind
@@ -28,6 +28,7 @@ __all__ = [
     "DFT",
     "OP_REGISTRY",
     "TRACK_STATE",
+    "Add",
     "AdcInput",
     "CfarWindow",
     "Classifier",
@@ -74,6 +75,7 @@ OP_REGISTRY: OpRegistry = make_registry(
     Sum,
     Magnitude,
     Log,
+    Add,
     CFAR,
     Threshold,
     Classifier,

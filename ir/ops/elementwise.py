@@ -1,16 +1,16 @@
-"""Elementwise ops: ``magnitude`` and ``log`` (decibels)."""
+"""Elementwise ops: ``magnitude``, ``log`` (decibels) and ``add``."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal
+from typing import ClassVar, Literal
 
 from pydantic import FiniteFloat
 
 from ir.ops.base import Op
 from ir.types import TensorType
 
-__all__ = ["Log", "Magnitude", "MagnitudeKind"]
+__all__ = ["Add", "Log", "Magnitude", "MagnitudeKind"]
 
 MagnitudeKind = Literal["l2", "l1", "square"]
 
@@ -79,3 +79,28 @@ class Log(Op):
         (t,) = self.expect_inputs(node_id, inputs)
         self.check_value(node_id, t, ("amplitude", "power"), allow_complex=False)
         return t.replace(domain="db")
+
+
+class Add(Op):
+    r"""Elementwise sum of two values of the same axes and domain: :math:`y = a + b`.
+
+    Complex if either input is.  Used, e.g., to add back a part of a signal that
+    was computed apart (the static part over chirps, :mod:`compiler.passes.static_split`).
+
+    Examples
+    --------
+    >>> t = TensorType(axes={"doppler": 4, "range": 8})
+    >>> Add().infer("s", [t, t.replace(complex=True)]).complex
+    True
+    """
+
+    arity: ClassVar[int] = 2
+    op: Literal["add"] = "add"
+
+    def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
+        a, b = self.expect_inputs(node_id, inputs)
+        if a.axes != b.axes or a.domain != b.domain:
+            raise self.fail(node_id, f"adds values of the same axes and domain; got {a.axes} "
+                                     f"({a.domain}) and {b.axes} ({b.domain})")
+        self.check_value(node_id, a, ("amplitude", "power"), allow_complex=True)
+        return a.replace(complex=a.complex or b.complex)
