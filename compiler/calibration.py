@@ -79,7 +79,7 @@ class NodeCalibration:
     frames : ndarray, optional
         For a graph input measured on calibration inputs: the calibration values
         themselves (frames first, after any ``per-input`` normalisation), for the
-        lowering's measured choices (:func:`compiler.lowering.dft_time.input_rounding`).
+        lowering's measured choices (:func:`compiler.lowering.time_inputs.input_rounding`).
         Compile-time only, like ``second_moments``.
     """
 

@@ -22,7 +22,7 @@ from typing import Any
 from ir import Graph
 from radar.config import RadarConfig
 
-__all__ = ["DEFAULT_CFAR", "range_chain", "range_doppler_chain"]
+__all__ = ["DEFAULT_CFAR", "capture_chain", "range_chain", "range_doppler_chain"]
 
 #: The demo's detector: 2-D OS-CFAR on the power map, guard 3/2 and training 8/4 cells per side
 #: along range/Doppler (N = 23·13 − 7·5 = 264 training cells), the k = 198 ≈ ¾N-th largest as the
@@ -122,3 +122,29 @@ def range_chain(config: RadarConfig, *, window: str = "hann", rx: int | None = N
     graph = Graph.from_dict({"name": name or f"{config.name}-range", "nodes": nodes})
     graph.verify()
     return graph
+
+
+def capture_chain(n_chirps: int = 128, n_samples: int = 128) -> Graph:
+    """The range–Doppler OS-CFAR chain of the OpenRadar TI captures (``shared/data/openradar``).
+
+    One complex frame ``[chirp, sample]`` (no receiver axis, no ADC full scale: the
+    captures are decoded codes), Hann windows, fftshifted Doppler, power, OS-CFAR
+    (guard 2 × 2, train 6 × 4, rank 100, Pfa 1e-4, range clipped, Doppler wrapped).
+
+    Examples
+    --------
+    >>> capture_chain().topological_order()[-3:]
+    ['mag', 'det', 'out']
+    """
+    return Graph.from_dict({"name": "openradar-rd", "nodes": [
+        {"id": "frame", "op": "input", "shape": {"chirp": n_chirps, "sample": n_samples},
+         "complex": True},
+        {"id": "win", "op": "window", "input": "frame", "axis": "sample"},
+        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range"},
+        {"id": "dwin", "op": "window", "input": "rng", "axis": "chirp"},
+        {"id": "dop", "op": "dft", "input": "dwin", "axis": "chirp", "out_axis": "doppler",
+         "shift": True},
+        {"id": "mag", "op": "magnitude", "input": "dop", "kind": "square"},
+        {"id": "det", "op": "cfar", "input": "mag", "kind": "os", "axes": ["range", "doppler"],
+         "guard": [2, 2], "train": [6, 4], "k": 100, "pfa": 1e-4, "edge": ["clip", "wrap"]},
+        {"id": "out", "op": "output", "input": "det"}]})

@@ -18,7 +18,7 @@ from compiler.compile import compile_graph
 from compiler.hardware import load_profile
 from compiler.lowering.charging import constant_schedule, with_guard
 from compiler.lowering.dft_common import sft_rmse
-from compiler.lowering.dft_time import repeated_rounding_error
+from compiler.lowering.time_inputs import repeated_rounding_error
 from compiler.passes.calibrate import CalibrationWarning
 from compiler.snn.coding import LatencyCode, dither_offsets
 from ir import Graph, evaluate

@@ -54,12 +54,9 @@ def test_carrada_on_loihi2_calibrated_on_other_seeds(carrada_loihi2):
 def test_the_mechanisms_are_recorded(carrada_loihi2):
     *_, program = carrada_loihi2
     net = program.networks[0]
-    assert net.meta["stage_gains"]["rng__moving"]["mechanism"] == "neurons"
-    rng = next(p for p in net.populations if p.id == "rng__moving/out")
-    # the static part is on the host (static-split): no leakage sets the scale, the
-    # strongest moving rows still get 8x the resolution of the weakest (was >= 16 with it)
-    assert rng.params.scale_axis == "range" and max(rng.params.scales) >= 4
-    assert all(np.log2(c).is_integer() for c in rng.params.scales)  # bias exponents
+    # the static part is on the host (static-split): no per-bin gains on the moving part
+    assert [r["moving_input"] for r in program.records["static-split"]] == ["adc__moving"]
+    assert "rng__moving" not in net.meta.get("stage_gains", {})
     assert net.meta["charging"]["rng__moving"]["rounding"] == ["feedback"]
     assert net.meta["charging"]["dop__moving"]["rounding"] == ["keep_sums"]
     rec = program.records["quantize"]
@@ -67,7 +64,21 @@ def test_the_mechanisms_are_recorded(carrada_loihi2):
     cut = next(r for r in rec if "det/cut" in r.projections).projections["det/cut"]
     assert cut["exponent"] == 1 and cut["exact"]  # k = 198 = 99 * 2 on an 8-bit mantissa
     mechanisms = {r["mechanism"] for r in program.records["report"].data["formats"]}
-    assert mechanisms == {"weight_format", "split_synapses", "neuron_scales", "weight_rounding"}
+    assert mechanisms == {"weight_format", "split_synapses", "weight_rounding"}
+
+
+def test_without_the_split_the_range_bins_get_neuron_gains():
+    config, scene = preset("carrada"), SCENE_PRESETS["carrada"]()
+    cal = np.stack([simulate_frame(config, scene, seed=s).adc for s in (100, 101)])
+    program = compile_graph(range_doppler_chain(config), "loihi2", calibration_inputs={"adc": cal},
+                            options={"static_split": "off"})
+    net = program.networks[0]
+    assert net.meta["stage_gains"]["rng"]["mechanism"] == "neurons"
+    rng = next(p for p in net.populations if p.id == "rng/out")
+    assert rng.params.scale_axis == "range" and max(rng.params.scales) >= 16
+    assert all(np.log2(c).is_integer() for c in rng.params.scales)  # bias exponents
+    mechanisms = {r["mechanism"] for r in program.records["report"].data["formats"]}
+    assert "neuron_scales" in mechanisms
 
 
 def test_feedback_rounding_keeps_the_error_off_a_static_return():

@@ -61,6 +61,10 @@ class LoweringContext:
         Per-node calibration data from the calibrate pass (node id → record).
     target : object, optional
         The hardware profile.
+    moving : frozenset of str
+        Nodes that compute the moving part of a static split
+        (:mod:`compiler.passes.static_split`): the part of the signal that repeats over
+        chirps is on the host.
     """
 
     graph: Graph
@@ -68,6 +72,7 @@ class LoweringContext:
     options: dict[str, Any] = field(default_factory=dict)
     calibration: dict[str, Any] = field(default_factory=dict)
     target: Any = None
+    moving: frozenset[str] = frozenset()
     types: dict[str, TensorType] = field(init=False)
     values: dict[str, Value] = field(init=False, default_factory=dict)
     _plan: list[_Open | str] = field(init=False, default_factory=list)

@@ -38,13 +38,15 @@ class Lower(Pass):
         registry = ctx.lowering or default_registry()
         calibration = program.records.get("calibrate") or {}
         options = ctx.options
-        pinned = host_nodes(program.records.get("static-split") or [])
+        split = program.records.get("static-split") or []
+        pinned = host_nodes(split)
         if pinned:  # the static split's host path (and the moving input) run on the host
             options = {**options, "motifs": {**dict.fromkeys(pinned, HOST),
                                              **(options.get("motifs") or {})}}
         lctx = LoweringContext(graph=program.graph, registry=registry, options=options,
                                calibration=getattr(calibration, "nodes", calibration),
-                               target=ctx.target)
+                               target=ctx.target,
+                               moving=frozenset(n for r in split for n in r["moving"]))
         program.segments = lower_graph(lctx)
         program.records[self.name] = {
             "motifs": {n: lctx.motif_for(n) for n in program.graph.topological_order()},

@@ -9,7 +9,13 @@ quantize pass's record (``records["quantize"]``):
 * ``neuron_scales`` — per-neuron threshold/bias scales (the S-FT's per-neuron gains): the
   neurons that carry one, the largest scale, and the per-neuron parameter memory (one
   bias exponent and one initial membrane per neuron, ``3 + state_bits`` bits — assumed);
-* ``weight_rounding`` — per time-coded layer: its weight width and rounding rule.
+* ``weight_rounding`` — per time-coded layer: its weight width and rounding rule;
+* ``charging_guard`` — a host-decoded layer's guard above the calibrated full scale: its
+  ratio and the charging steps it takes from the window;
+* ``input_dither`` — an encoder whose rounding is dithered: the extra rounding noise;
+* ``static_split`` — the part repeating over chirps computed on the host: the host
+  multiply-adds per frame it adds (chirp mean, its range DFT, the rank-one Doppler product
+  and the sum).
 
 Examples
 --------
@@ -71,4 +77,37 @@ def format_rows(program) -> list[dict]:
             rows.append({"node": node, "item": node, "mechanism": "weight_rounding",
                          "detail": f"{ch.get('weight_bits')}-bit levels, {rule}, "
                                    f"{ch.get('kind')} charging", "cost": ""})
+        for node, ch in (net.meta.get("charging") or {}).items():
+            guard = ch.get("guard") or {}
+            if guard.get("steps"):
+                rows.append({"node": node, "item": node, "mechanism": "charging_guard",
+                             "detail": f"values up to {guard['ratio']:g}x the calibrated full "
+                                       "scale coded, not clipped",
+                             "cost": f"{guard['steps']} of {ch['n_steps']} charging steps"})
+        for enc in net.encoders:
+            if getattr(enc.code, "rounding", None) == "dither":
+                rows.append({"node": enc.node or enc.port, "item": enc.population,
+                             "mechanism": "input_dither",
+                             "detail": "rounding error white over the chirps (no repeated error)",
+                             "cost": "rounding noise x2 (s^2/6 instead of s^2/12)"})
+    rows += _split_rows(program)
+    return rows
+
+
+def _split_rows(program) -> list[dict]:
+    types = program.graph.infer_types()
+    rows = []
+    for rec in program.records.get("static-split") or []:
+        mean, *stages, static = rec["static"]
+        adc = types[rec["input"]]
+        macs = adc.size + types[rec["moving_input"]].size  # the chirp mean and x - mean
+        for node in stages:  # the range stages on the mean (one chirp): n_in per output
+            op, src = program.graph.op(node), program.graph.inputs_of(node)[0]
+            macs += types[node].size * (types[src].axes[op.axis] if hasattr(op, "axis") else 1)
+        macs += 2 * types[rec["add"]].size  # the rank-one product and the sum
+        rows.append({"node": rec["add"], "item": ", ".join(rec["static"]),
+                     "mechanism": "static_split",
+                     "detail": f"the part of {rec['input']!r} repeating over {rec['axis']!r} "
+                               "computed exactly on the host",
+                     "cost": f"{macs:,} host multiply-adds per frame"})
     return rows
