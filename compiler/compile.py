@@ -32,6 +32,7 @@ import numpy as np
 from compiler.guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
+from compiler.lowering.time_inputs import TimeInputOptions
 from compiler.option_checks import check_options
 from compiler.passes import CompileContext, Pass, Verify, run_pipeline
 from compiler.passes.base import Progress
@@ -42,7 +43,7 @@ from compiler.passes.place import Place
 from compiler.passes.quantize import Quantize
 from compiler.passes.report import ReportPass
 from compiler.passes.split import Split
-from compiler.passes.static_split import StaticSplit
+from compiler.passes.static_split import StaticSplit, StaticSplitOptions
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError
@@ -56,12 +57,6 @@ EXTRA_OPTIONS = {
     "headroom": "calibration headroom factor >= 1 (static policy)",
     "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
     "charging": "S-FT charging schedule: auto | constant | companding",
-    "input_rounding": "time-coded inputs: auto | nearest | dither (auto: dither where a later "
-                      "stage sums over another axis, e.g. chirps)",
-    "static_split": "range-Doppler chains: the part repeating over chirps on the host, "
-                    "auto | off",
-    "charging_guard": "host-decoded S-FT: values up to this factor above calibration are "
-                      "coded coarsely, not clipped (default 16; 1 = off)",
     "stage_gains": "time-coded S-FT: per-bin gains between linear stages, auto | none",
     "fft_radices": "radix sequence of the time-fft motif",
     "input_range": "assumed max |input| of rate/fft motifs without calibration",
@@ -76,12 +71,16 @@ EXTRA_OPTIONS = {
     "n_angle_bins": "report: angle bins of the RA map (default 256)",
     "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
     "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
+    # typed fields of their pass or motif (the description says what the value must be)
+    **{n: f"{f.description} — {(m.__doc__ or '').splitlines()[0]}"
+       for m in (StaticSplitOptions, TimeInputOptions) for n, f in m.model_fields.items()},
 }
 
 
 def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
     """The passes ``compile_graph`` runs, in order (the allocation passes need a target)."""
-    passes: list[Pass] = [Verify(), FuseLinear(), StaticSplit(), Calibrate(), Lower()]
+    passes: list[Pass] = [Verify(), FuseLinear(), StaticSplit.from_options(options), Calibrate(),
+                          Lower()]
     if hardware:
         passes += [Quantize(), Split(), Place(), ReportPass()]
     return passes

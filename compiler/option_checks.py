@@ -24,10 +24,14 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from pydantic import BaseModel, ValidationError
+
+from compiler.lowering.time_inputs import TimeInputOptions
+from compiler.passes.static_split import StaticSplitOptions
 from ir.errors import CompileError
 from ir.model import short_repr
 
-__all__ = ["OPTION_CHECKS", "check_options"]
+__all__ = ["OPTION_CHECKS", "check_options", "typed_checks"]
 
 
 def _real(v: object) -> bool:
@@ -55,6 +59,31 @@ def _one_of(*names: str) -> Callable[[object], bool]:
     return lambda v: isinstance(v, str) and v in names
 
 
+def typed_checks(model: type[BaseModel]) -> dict[str, tuple[Callable[[object], bool], str]]:
+    """Checkers of the options a pass or motif declares as typed fields of ``model``.
+
+    Each field is one option (its name), validated by pydantic as the field; the field's
+    ``description`` says what the value must be.
+
+    Examples
+    --------
+    >>> from compiler.passes.static_split import StaticSplitOptions
+    >>> rule, what = typed_checks(StaticSplitOptions)["static_split"]
+    >>> rule("off"), rule("on"), what
+    (True, False, 'auto or off')
+    """
+    def rule(name: str) -> Callable[[object], bool]:
+        def ok(value: object) -> bool:
+            try:
+                model.model_validate({name: value})
+            except ValidationError:
+                return False
+            return True
+        return ok
+
+    return {name: (rule(name), f.description or name) for name, f in model.model_fields.items()}
+
+
 #: Option name -> (rule, what the value must be).
 OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
     "headroom": (lambda v: _real(v) and v >= 1, "a finite number >= 1"),
@@ -62,9 +91,6 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
         isinstance(k, str) and _real(x) and x > 0 for k, x in v.items()),
         "a mapping of input node id to a finite number > 0"),
     "charging": (lambda v: isinstance(v, str), "a schedule name (auto, constant, companding)"),
-    "input_rounding": (lambda v: v in ("auto", "nearest", "dither"), "auto, nearest or dither"),
-    "static_split": (lambda v: v in ("auto", "off"), "auto or off"),
-    "charging_guard": (lambda v: _real(v) and v >= 1, "a finite number >= 1 (1: no guard)"),
     "stage_gains": (lambda v: isinstance(v, str), "auto or none"),
     "fft_radices": (lambda v: isinstance(v, list | tuple) and len(v) >= 1 and all(
         _int(r) and 2 <= r <= 1 << 16 for r in v), "a list of integer radices >= 2"),
@@ -86,6 +112,8 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
     "motifs": (lambda v: isinstance(v, Mapping) and all(
         isinstance(k, str) and isinstance(x, str) for k, x in v.items()),
         "a mapping of node id or op name to a motif name"),
+    **typed_checks(StaticSplitOptions),
+    **typed_checks(TimeInputOptions),
 }
 
 

@@ -179,3 +179,16 @@ def test_per_input_values_come_back_in_the_inputs_units(tmp_path) -> None:
         sys.modules.pop("units_pkg", None)
     for k in ("of", "op", "odb"):
         np.testing.assert_array_equal(got[k], result.outputs[k])
+
+
+@pytest.mark.parametrize(("option", "value", "what"), [
+    ("static_split", "on", "auto or off"),
+    ("input_rounding", "round", "auto, nearest or dither"),
+    ("charging_guard", 0.5, r"a finite number >= 1 \(1: no guard\)"),
+    ("charging_guard", float("nan"), "a finite number >= 1"),
+])
+def test_the_typed_options_are_refused_before_any_pass_runs(option, value, what) -> None:
+    from ir.errors import CompileError
+
+    with pytest.raises(CompileError, match=rf"compile option {option}=.* must be {what}"):
+        compile_graph(_range_graph(16), None, options={option: value})

@@ -24,7 +24,8 @@ from radar.scene import SCENE_PRESETS, simulate_frame
 
 def _split(graph: Graph, **options) -> CompiledProgram:
     ctx = CompileContext(options=options)
-    return StaticSplit().apply(ctx, FuseLinear().apply(ctx, CompiledProgram(graph=graph)))
+    split = StaticSplit.from_options(options)
+    return split.apply(ctx, FuseLinear().apply(ctx, CompiledProgram(graph=graph)))
 
 
 def _chain(n_chirps: int, n_samples: int, dwin: str | None, keep: str, shift: bool,

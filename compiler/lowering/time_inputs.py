@@ -11,18 +11,36 @@ Both serve a calibration that transfers to frames the calibration set did not co
 
 from __future__ import annotations
 
+from typing import Literal
+
 import networkx as nx
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from compiler.calibration import NodeCalibration
 from compiler.lowering.charging import GUARD_RATIO, guard_steps
 from compiler.lowering.context import LoweringContext
 from compiler.snn import Split
 from compiler.snn.coding import split_values
-from ir.errors import CompileError
 from ir.ops import DFT, Linear, Output, Sum
 
-__all__ = ["guard_of", "input_rounding", "repeated_rounding_error"]
+__all__ = ["TimeInputOptions", "guard_of", "input_rounding", "repeated_rounding_error"]
+
+
+class TimeInputOptions(BaseModel):
+    """Options of the time-coded S-FT's input rounding and read-out guard (typed fields)."""
+
+    model_config = ConfigDict(frozen=True, extra="ignore")
+    input_rounding: Literal["auto", "nearest", "dither"] = Field(
+        "auto", description="auto, nearest or dither")
+    charging_guard: float = Field(GUARD_RATIO, ge=1, allow_inf_nan=False,
+                                  description="a finite number >= 1 (1: no guard)")
+
+    @classmethod
+    def of(cls, ctx: LoweringContext) -> TimeInputOptions:
+        """The options of ``ctx`` (already checked by ``compile_graph``; None = default)."""
+        return cls.model_validate({k: v for k, v in ctx.options.items()
+                                   if k in cls.model_fields and v is not None})
 
 
 def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
@@ -42,16 +60,13 @@ def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> input_rounding(SimpleNamespace(option=lambda k, d=None: "nearest"), "f", None, 1.0,
+    >>> input_rounding(SimpleNamespace(options={"input_rounding": "nearest"}), "f", None, 1.0,
     ...                "signed")
     'nearest'
     """
-    mode = ctx.option("input_rounding", "auto")
-    if mode in ("nearest", "dither"):
-        return mode
+    mode = TimeInputOptions.of(ctx).input_rounding
     if mode != "auto":
-        raise CompileError(f"node {consumer!r}: input_rounding={mode!r} is not a mode; use "
-                           "auto, nearest or dither", node=consumer)
+        return mode
     graph = ctx.graph
     axis = getattr(graph.op(consumer), "axis", None)
     later = {graph.op(n).axis for n in nx.descendants(graph.to_networkx(), consumer)
@@ -107,7 +122,7 @@ def guard_of(ctx: LoweringContext, node: str, t_steps: int) -> tuple[int, float]
     while the guard's threshold range would cost weight bits (the Doppler layer of the
     seed003 chain: 8 → 6 on loihi2, cell sensitivity 0.965 → 0.854).
     """
-    ratio = float(ctx.option("charging_guard", GUARD_RATIO))
+    ratio = TimeInputOptions.of(ctx).charging_guard
     rec = ctx.calibration.get(node)
     consumers = ctx.graph.consumers_of(node)
     if (ratio <= 1 or rec is None or rec.source == "bounds" or not consumers

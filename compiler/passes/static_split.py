@@ -51,10 +51,12 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
@@ -63,10 +65,17 @@ from ir import Graph
 from ir.errors import CompileError
 from ir.ops import DFT, Add, Linear, Op, Sum, Window
 
-__all__ = ["StaticSplit", "MODES"]
+__all__ = ["StaticSplit", "StaticSplitOptions", "MODES"]
 
 #: Values of the ``static_split`` option.
 MODES = ("auto", "off")
+
+
+class StaticSplitOptions(BaseModel):
+    """The pass's option, a typed field (``compile_graph(options={"static_split": ...})``)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    static_split: Literal["auto", "off"] = Field("auto", description="auto or off")
 
 _LINEAR = (Window, DFT, Linear, Sum)
 
@@ -158,15 +167,29 @@ def host_nodes(record: list[dict[str, Any]]) -> list[str]:
 
 @dataclass(frozen=True)
 class StaticSplit(Pass):
-    """Compute the part that repeats over chirps on the host; see the module docstring."""
+    """Compute the part that repeats over chirps on the host; see the module docstring.
 
+    Parameters
+    ----------
+    mode : {"auto", "off"}
+        ``auto`` splits every chain that matches; ``off`` leaves the graph as it is.
+    """
+
+    mode: Literal["auto", "off"] = "auto"
     name = "static-split"
 
-    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        mode = ctx.options.get("static_split") or "auto"
-        if mode not in MODES:
-            raise CompileError(f"static_split={mode!r} is not a mode; use one of "
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise CompileError(f"static_split={self.mode!r} is not a mode; use one of "
                                f"{', '.join(MODES)}")
+
+    @classmethod
+    def from_options(cls, options: Mapping[str, Any]) -> StaticSplit:
+        """The pass configured by ``compile_graph``'s ``options`` (:class:`StaticSplitOptions`)."""
+        return cls(mode=options.get("static_split") or "auto")
+
+    def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        mode = self.mode
         record: list[dict[str, Any]] = []
         graph = program.graph
         motifs = dict(ctx.options.get("motifs") or {})
