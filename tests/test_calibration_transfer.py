@@ -49,14 +49,15 @@ def test_ti_chirp_calibrated_on_the_other_three_is_not_clipped(shared_data) -> N
     x = x.astype(np.float64)
     n = x.shape[1]
     program = compile_graph(_range_graph(n), load_profile("loihi2"),
-                            calibration_inputs={"x": x[1:]}, time_steps=256)
+                            calibration_inputs={"x": x[1:]}, time_steps=256,
+                            options={"output_spikes": "time"})  # the charging stage's guard
     meta = program.networks[0].meta["charging"]["f"]
     assert meta["guard"]["ratio"] >= 8 and meta["guard"]["steps"] == 16
     y = run_program(program, {"x": x[0]}, out_of_range="clip").outputs["o"]
     rmse = sft_rmse(y[None], np.fft.fft(x[0])[None, : n // 2], n_fft=n)
     assert rmse <= 0.0149, rmse
     off = compile_graph(_range_graph(n), load_profile("loihi2"), calibration_inputs={"x": x[1:]},
-                        time_steps=256, options={"charging_guard": 1})
+                        time_steps=256, options={"charging_guard": 1, "output_spikes": "time"})
     y_off = run_program(off, {"x": x[0]}, out_of_range="clip").outputs["o"]
     assert sft_rmse(y_off[None], np.fft.fft(x[0])[None, : n // 2], n_fft=n) > 5 * rmse
 

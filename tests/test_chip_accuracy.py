@@ -64,7 +64,8 @@ def test_the_mechanisms_are_recorded(carrada_loihi2):
     cut = next(r for r in rec if "det/cut" in r.projections).projections["det/cut"]
     assert cut["exponent"] == 1 and cut["exact"]  # k = 198 = 99 * 2 on an 8-bit mantissa
     mechanisms = {r["mechanism"] for r in program.records["report"].data["formats"]}
-    assert mechanisms == {"weight_format", "split_synapses", "weight_rounding"}
+    assert mechanisms == {"weight_format", "split_synapses", "weight_rounding", "static_split",
+                          "graded_readout"}  # the Doppler layer: one 24-bit payload
 
 
 def test_without_the_split_the_range_bins_get_neuron_gains():

@@ -190,7 +190,7 @@ def test_decoder_motif_equals_c_times_the_decoded_sft() -> None:
     x = np.array([0.3, -1.0, 0.25, 0.9, -0.5, 0.0, 0.75, -0.125])
     c = -1.75
     graph = scaled_chain(c)
-    kw = {"calibration": WORST, "options": {"charging": "constant"}}
+    kw = {"calibration": WORST, "options": {"charging": "constant", "output_spikes": "time"}}
     on_spikes = run_program(compile_scaled(graph, "decoder", **kw), {"x": x}).values
     on_host = run_program(compile_scaled(graph, "host", **kw), {"x": x}).values
     np.testing.assert_allclose(on_spikes["half"], c * on_host["rng"], rtol=1e-12, atol=1e-12)

@@ -35,7 +35,7 @@ Examples
 >>> p = compile_graph(g, calibration="per-input", calibration_inputs={"a": x})
 >>> from backends.reference import run_program
 >>> np.abs(run_program(p, {"a": x}).outputs["o"]).max(axis=1).round(1).tolist()
-[4.0, 400.1]
+[4.0, 400.0]
 """
 
 from __future__ import annotations

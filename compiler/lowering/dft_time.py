@@ -67,7 +67,7 @@ from compiler.lowering.stage_gains import (
     pow2_gains,
     stage_gains,
 )
-from compiler.lowering.time_inputs import guard_of, input_rounding
+from compiler.lowering.time_inputs import graded_readout, guard_of, input_rounding
 from compiler.lowering.values import SpikeValue, Value
 from compiler.quantize_weights import rint_feedback, rint_keep_sums, weight_bits_of
 from compiler.snn import (
@@ -241,6 +241,11 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
     stacked = np.concatenate([i.matrix.ravel() for i in inputs])
     whole = integer_target(ctx) and (getattr(ctx.target, "bias_mantissa_bits", None) or True)
     top = float(max(gains)) if neuron_gains else 1.0
+    if graded_readout(ctx, node, host_only=_allow_companding(ctx, node),
+                      neuron_gains=neuron_gains and top > 1):
+        return graded_layer(ctx, node, code_in, inputs, shape=shape, split=split,
+                            full_scale=full_scale, motif=motif, gain_axis=gain_axis,
+                            gains=gains, bits=bits, whole=bool(whole))
     mode = ctx.option("charging", "auto")
     n_guard, guard = 0, 1.0
     if mode != "constant" and not _allow_companding(ctx, node):
@@ -256,7 +261,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         if whole:  # integer weights: keep the rounding error off the strong static inputs
             levels, rounding = _round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
                                              top_level)
-        unit = q * code_in.scale
+        unit = _unit(node, q, code_in)
         sched, errors = choose_schedule(t - n_guard, (full_scale or 1.0) / unit,
                                         np.asarray(samples) / unit if samples else None,
                                         mode=mode, whole=whole)
@@ -306,6 +311,77 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
                       missing=0.0, combine=split, node=node, **gained)
         code = {"kind": "time-table", "end": e_out, "split": split}
     return ctx.spike_value(node, pop, dec, (e_in, e_out), **code, charging=charging)
+
+
+def graded_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[LayerInput],
+                 *, shape: dict[str, int], split: Split, full_scale: float, motif: str,
+                 gain_axis: str | None, gains: tuple[float, ...], bits: int,
+                 whole: bool) -> SpikeValue:
+    """The layer of :func:`time_layer` read out as one graded spike per neuron.
+
+    The silent stage as there; then input and spiking stay off and each neuron's
+    membrane ``V`` (whole membrane units) is its payload, decoded as ``unit · V`` (``/2``
+    for ± parts: ``V⁺ − V⁻ = 2 M ẑ``).  The weights are coarsened until the largest
+    calibrated ``|V|`` times the guard (:func:`~compiler.lowering.time_inputs.guard_of`,
+    halved down to 8× first) fits the payload and the membrane state.
+    """
+    target = ctx.target
+    width = min(b for b in (getattr(target, "graded_spike_bits", None),
+                            getattr(target, "state_bits", None), 64) if b)
+    limit = float(2 ** (width - 1) - 1)
+    wanted = guard_of(ctx, node, 256)[1]  # the ratio: a read-out layer's, else none
+    stacked = np.concatenate([i.matrix.ravel() for i in inputs])
+    peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
+    top_level = 2 ** (bits - 1) - 1
+    for _ in range(8):  # fewer weight levels until the guarded value fits the payload
+        q = peak / top_level
+        levels, rounding = np.rint(stacked / q), ["nearest"] * len(inputs)
+        if whole:
+            levels, rounding = _round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
+                                             top_level)
+        unit = _unit(node, q, code_in)
+        v_full = (full_scale or 1.0) / unit
+        guard = wanted
+        while v_full * guard > limit and guard / 2 >= min(GUARD_MIN_RATIO, wanted):
+            guard /= 2
+        excess = v_full * guard / limit
+        if excess <= 1.0 or top_level == 1:
+            break
+        top_level = max(1, math.floor(top_level / (excess * 1.01)))
+    bits = max(2, math.ceil(math.log2(top_level + 1)) + 1)
+    e_in = code_in.end
+    phases = (Phase(start_step=0, spiking_on=False),
+              Phase(start_step=e_in, input_on=False, spiking_on=False))
+    params = NeuronParams(du=0.0, dv=0.0, v_th=1.0, reset="fire_once", phases=phases)
+    builder = ctx.builder()
+    pop: Population = builder.population(node, "out", shape, params, motif=motif)
+    offset = 0
+    for i, inp in enumerate(inputs):
+        w = levels[offset:offset + inp.matrix.size].reshape(inp.matrix.shape)
+        offset += inp.matrix.size
+        builder.matrix(node, f"w{i}", inp.source, pop.id, contract=inp.contract,
+                       produce=inp.produce, motif=motif, weights=w)
+    charging = {"kind": "graded", "n_steps": 1, "weight_bits": bits, "unit": unit,
+                "rounding": rounding, "guard": {"ratio": guard, "steps": 0},
+                "payload_bits": width, "v_full": v_full}
+    builder.meta.setdefault("charging", {})[node] = charging
+    gained = {"gain_axis": gain_axis, "gains": tuple(gains)} if gain_axis else {}
+    half = 0.5 if N_PARTS[split] else 1.0
+    dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit * half,
+                  combine=split, node=node, **gained)
+    return ctx.spike_value(node, pop, dec, (e_in, e_in + 1), kind="graded", end=e_in + 1,
+                           split=split, charging=charging)
+
+
+def _unit(node: str, q: float, code_in: TimeCode) -> float:
+    """The layer's membrane unit (value units): the weight step times the input code's."""
+    unit = q * code_in.scale
+    if not (math.isfinite(unit) and unit > 0):
+        raise CompileError(f"node {node!r}: its membrane unit underflows ({q:g} per weight "
+                           f"level x {code_in.scale:g} per input step): the values it carries "
+                           "are too small for floating point; rescale the chain's weights",
+                           node=node)
+    return unit
 
 
 def integer_target(ctx: LoweringContext) -> bool:

@@ -22,19 +22,23 @@ from compiler.lowering.charging import GUARD_RATIO, guard_steps
 from compiler.lowering.context import LoweringContext
 from compiler.snn import Split
 from compiler.snn.coding import split_values
+from ir.errors import BudgetError, CompileError
 from ir.ops import DFT, Linear, Output, Sum
 
-__all__ = ["TimeInputOptions", "guard_of", "input_rounding", "repeated_rounding_error"]
+__all__ = ["TimeInputOptions", "graded_readout", "guard_of", "input_rounding",
+           "repeated_rounding_error"]
 
 
 class TimeInputOptions(BaseModel):
-    """Options of the time-coded S-FT's input rounding and read-out guard (typed fields)."""
+    """Options of the time-coded S-FT's input rounding and read-out (typed fields)."""
 
     model_config = ConfigDict(frozen=True, extra="ignore")
     input_rounding: Literal["auto", "nearest", "dither"] = Field(
         "auto", description="auto, nearest or dither")
     charging_guard: float = Field(GUARD_RATIO, ge=1, allow_inf_nan=False,
                                   description="a finite number >= 1 (1: no guard)")
+    output_spikes: Literal["auto", "time", "graded"] = Field(
+        "auto", description="auto, time or graded")
 
     @classmethod
     def of(cls, ctx: LoweringContext) -> TimeInputOptions:
@@ -129,3 +133,35 @@ def guard_of(ctx: LoweringContext, node: str, t_steps: int) -> tuple[int, float]
             or not all(isinstance(ctx.graph.op(c), Output) for c in consumers)):
         return 0, 1.0
     return guard_steps(t_steps), ratio
+
+
+def graded_readout(ctx: LoweringContext, node: str, *, host_only: bool,
+                   neuron_gains: bool) -> bool:
+    r"""Whether layer ``node`` sends its value as one graded spike (option ``output_spikes``).
+
+    A graded spike carries an integer payload (Loihi 2: ``graded_spike_bits`` of the
+    profile).  After the silent stage the membrane *is* the layer's value in membrane
+    units, ``V = Σ Q (E − t) = (M ẑ)/(q s_in)`` exactly, so a neuron that sends ``V`` as
+    its payload replaces the ``T``-step charging stage and its rounding (``± b/2``): the
+    read-out is exact up to the weights' and the input code's rounding, one step late
+    instead of ``T``.  ``auto`` picks it where the value goes to the host only, the
+    target has graded spikes and the layer has no per-neuron gains (their scales act on
+    the charging stage); ``graded`` on a target without graded spikes is an error.
+    """
+    mode = TimeInputOptions.of(ctx).output_spikes
+    bits = getattr(ctx.target, "graded_spike_bits", None)
+    if mode == "time":
+        return False
+    possible = host_only and not neuron_gains
+    if mode == "graded":
+        if not bits:
+            raise BudgetError(f"node {node!r}: output_spikes='graded' needs a target with graded "
+                              f"spikes; {getattr(ctx.target, 'name', 'this target')!r} has binary "
+                              "spikes only (graded_spike_bits: null); use output_spikes='time'",
+                              node=node)
+        if not possible:
+            raise CompileError(f"node {node!r}: output_spikes='graded' needs a layer read on "
+                               "the host only and without per-neuron gains (stage_gains)",
+                               node=node)
+        return True
+    return bool(bits) and possible

@@ -10,6 +10,8 @@ quantize pass's record (``records["quantize"]``):
   neurons that carry one, the largest scale, and the per-neuron parameter memory (one
   bias exponent and one initial membrane per neuron, ``3 + state_bits`` bits — assumed);
 * ``weight_rounding`` — per time-coded layer: its weight width and rounding rule;
+* ``graded_readout`` — a layer that sends its membrane as one graded spike: the payload
+  width and the payload traffic per frame (no charging stage);
 * ``charging_guard`` — a host-decoded layer's guard above the calibrated full scale: its
   ratio and the charging steps it takes from the window;
 * ``input_dither`` — an encoder whose rounding is dithered: the extra rounding noise;
@@ -79,6 +81,14 @@ def format_rows(program) -> list[dict]:
                                    f"{ch.get('kind')} charging", "cost": ""})
         for node, ch in (net.meta.get("charging") or {}).items():
             guard = ch.get("guard") or {}
+            if ch.get("kind") == "graded":
+                pop = net.population[f"{node}/out"] if f"{node}/out" in net.population else None
+                size = pop.size if pop is not None else 0
+                rows.append({"node": node, "item": node, "mechanism": "graded_readout",
+                             "detail": f"membrane sent as a {ch['payload_bits']}-bit payload, "
+                                       f"guard {guard.get('ratio', 1):g}x",
+                             "cost": f"{size:,} payloads x {ch['payload_bits']} bits = "
+                                     f"{size * ch['payload_bits'] / 8192:.1f} kB per frame"})
             if guard.get("steps"):
                 rows.append({"node": node, "item": node, "mechanism": "charging_guard",
                              "detail": f"values up to {guard['ratio']:g}x the calibrated full "
