@@ -76,6 +76,9 @@ class NodeCalibration:
         Per axis a linear consumer contracts (integer targets only): ``E[p pᵀ]`` of the
         ± part vectors along it, rows ``(index, part)`` — what
         :func:`compiler.quantize_weights.rint_feedback` rounds the layer's weights against.
+    frame_peaks : tuple of float
+        The largest part of each calibration frame (empty from bounds or unframed values):
+        the spread a new frame may show (:func:`compiler.lowering.time_inputs.encoder_headroom`).
     frames : ndarray, optional
         For a graph input measured on calibration inputs: the calibration values
         themselves (frames first, after any ``per-input`` normalisation), for the
@@ -98,6 +101,7 @@ class NodeCalibration:
     axis_quantiles: dict[str, tuple[float, ...]] = field(default_factory=dict)
     second_moments: dict[str, np.ndarray] = field(default_factory=dict, compare=False,
                                                   repr=False)
+    frame_peaks: tuple[float, ...] = ()
     frames: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
@@ -218,12 +222,15 @@ def measure(node: str, values: np.ndarray, *, normalize_axes: tuple[str, ...] = 
                                f"the axes {axes} (optionally after a frames axis)", node=node)
         r, i = (re, im) if framed else (re[None], im[None])
         profiles = _axis_profiles(np.maximum(r, i), r, i if cplx else None, tuple(axes))
+        peaks = tuple(float(p) for p in np.maximum(r, i).reshape(r.shape[0], -1).max(axis=1))
+    else:
+        peaks = ()
     return NodeCalibration(node=node, max_re=_top(re), max_im=_top(im), max_abs=_top(mag),
                            max_l1=_top(re + im), min=float(np.real(v).min()) if v.size else 0.0,
                            max=float(np.real(v).max()) if v.size else 0.0,
                            part_quantiles=_quantiles(parts), abs_quantiles=_quantiles(mag.ravel()),
                            normalize_axes=tuple(normalize_axes), axis_max=profiles[0],
-                           axis_quantiles=profiles[1])
+                           axis_quantiles=profiles[1], frame_peaks=peaks)
 
 
 def _amplitude(rng: np.random.Generator, shape: tuple[int, ...], cplx: bool) -> np.ndarray:

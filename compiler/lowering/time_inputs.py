@@ -25,8 +25,40 @@ from compiler.snn.coding import split_values
 from ir.errors import BudgetError, CompileError
 from ir.ops import DFT, Linear, Output, Sum
 
-__all__ = ["TimeInputOptions", "graded_readout", "guard_of", "input_rounding",
-           "repeated_rounding_error"]
+__all__ = ["ENCODER_HEADROOM", "TimeInputOptions", "encoder_headroom", "graded_readout",
+           "guard_of", "input_rounding", "repeated_rounding_error"]
+
+
+#: The least headroom of a host encoder's code above the calibrated maximum (6 dB).
+ENCODER_HEADROOM = 2.0
+
+
+def encoder_headroom(rec: NodeCalibration) -> float:
+    r"""The factor a host encoder's range leaves above a value's calibrated maximum.
+
+    The input code is where a new frame is clipped before any processing, and a frame the
+    calibration set did not contain may peak higher (noise peaks over more samples, a
+    stronger or closer target).  With the calibration frames' peaks ``P_f`` the factor is
+
+    .. math:: h = \max\bigl(2,\ \max_f P_f / \operatorname{median}_f P_f\bigr)
+
+    (the set's own spread, at least 6 dB); 1 for a range propagated from declared bounds
+    (a worst case).  It costs the input code ``log₂ h`` bits of resolution.
+
+    Examples
+    --------
+    >>> from compiler.calibration import measure
+    >>> encoder_headroom(measure("x", np.array([[1.0, 2.0], [3.0, 8.0]]), axes=("s",)))
+    2.0
+    >>> encoder_headroom(measure("x", np.array([[1.0], [2.0], [10.0]]), axes=("s",)))
+    5.0
+    """
+    if rec.source == "bounds":
+        return 1.0
+    peaks = np.asarray(rec.frame_peaks, dtype=np.float64)
+    median = float(np.median(peaks)) if peaks.size else 0.0
+    spread = float(peaks.max()) / median if median > 0 else 1.0
+    return max(ENCODER_HEADROOM, spread)
 
 
 class TimeInputOptions(BaseModel):
