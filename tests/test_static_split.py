@@ -116,3 +116,20 @@ def test_seed003_leakage_rows_no_longer_give_false_detections() -> None:
     spk = np.asarray(spk).astype(bool)
     hits = int((conv & spk).sum())
     assert hits >= 0.97 * conv.sum() and hits >= 0.97 * spk.sum(), (hits, conv.sum(), spk.sum())
+
+
+def test_per_input_calibration_normalises_the_input_before_the_split() -> None:
+    """The spiking stages encode the mean-removed samples, a host value: the run must
+    normalise the graph input itself, as calibration did (before: every sample clipped)."""
+    config, scene = preset("carrada"), SCENE_PRESETS["carrada"]()
+    graph = range_doppler_chain(config)
+    cal = np.stack([simulate_frame(config, scene, seed=s).adc for s in (100, 101)])
+    program = compile_graph(graph, None, calibration="per-input", calibration_inputs={"adc": cal})
+    frame = simulate_frame(config, scene, seed=0)
+    result = run_program(program, {"adc": 3.0 * frame.adc})  # another level: no clipping
+    assert not result.clipped and result.input_peaks["adc"].size == 1
+    conv = evaluate(graph, {"adc": 3.0 * frame.adc})
+    spk = np.asarray(result.values["det"]).astype(bool)
+    hits = int((conv["det"] & spk).sum())
+    assert hits >= 0.97 * conv["det"].sum() and hits >= 0.97 * spk.sum()
+    np.testing.assert_allclose(result.values["rd"].max(), conv["rd"].max(), rtol=0.01)

@@ -45,6 +45,7 @@ from collections.abc import Mapping
 import networkx as nx
 import numpy as np
 
+from compiler.passes.calibrate import mixed_axes
 from compiler.program import CompiledProgram
 from compiler.snn.coding import normalize_values
 
@@ -52,21 +53,31 @@ __all__ = ["apply_units", "normalize_inputs", "normalized_inputs", "unit_plan"]
 
 
 def normalized_inputs(program: CompiledProgram) -> dict[str, tuple[str, ...]]:
-    """``{graph input: normalised axes}`` of the encoders that normalise a graph input.
+    """``{graph input: normalised axes}`` under the ``per-input`` policy.
 
-    Read from the networks (a loaded program keeps them; calibration records are
-    compile-time).
+    From the program's options (``calibration``, kept in artifacts): every graph input over
+    the axes a later stage mixes (:func:`compiler.passes.calibrate.mixed_axes`), as the
+    calibrate pass normalised it — also where the encoded value is computed from the input
+    on the host first (the static split's mean-removed samples); plus the encoders that
+    normalise a graph input themselves (a network compiled on its own).
 
     Examples
     --------
-    >>> from compiler.program import CompiledProgram
+    >>> from compiler.passes.calibrate import mixed_axes
+from compiler.program import CompiledProgram
     >>> from ir import Graph
     >>> normalized_inputs(CompiledProgram(graph=Graph(name="g")))
     {}
     """
     inputs = set(program.graph.input_ids())
-    return {e.port: tuple(e.normalize_axes) for net in program.networks for e in net.encoders
-            if e.port in inputs and e.normalize_axes}
+    out = {e.port: tuple(e.normalize_axes) for net in program.networks for e in net.encoders
+           if e.port in inputs and e.normalize_axes}
+    if program.options.get("calibration") == "per-input":
+        for node in program.graph.input_ids():
+            axes = mixed_axes(program.graph, node)
+            if axes:
+                out.setdefault(node, axes)
+    return out
 
 
 def normalize_inputs(values: Mapping[str, np.ndarray], axes: Mapping[str, tuple[str, ...]],
