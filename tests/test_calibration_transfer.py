@@ -187,9 +187,25 @@ def test_per_input_values_come_back_in_the_inputs_units(tmp_path) -> None:
     ("input_rounding", "round", "auto, nearest or dither"),
     ("charging_guard", 0.5, r"a finite number >= 1 \(1: no guard\)"),
     ("charging_guard", float("nan"), "a finite number >= 1"),
+    ("encoder_headroom", 0.5, "auto or a finite number >= 1"),
 ])
 def test_the_typed_options_are_refused_before_any_pass_runs(option, value, what) -> None:
     from ir.errors import CompileError
 
     with pytest.raises(CompileError, match=rf"compile option {option}=.* must be {what}"):
         compile_graph(_range_graph(16), None, options={option: value})
+
+
+def test_the_encoder_range_leaves_the_calibration_sets_spread_at_least_6_db() -> None:
+    rng = np.random.default_rng(5)
+    one = rng.normal(size=(1, 16))
+    def x_max(cal, **options):
+        p = compile_graph(_range_graph(16), None, calibration_inputs={"x": cal}, time_steps=32,
+                          options=options)
+        (enc,) = p.networks[0].encoders
+        return enc.code.x_max
+    top = float(np.abs(one).max())
+    assert x_max(one) == pytest.approx(2 * top)  # one frame: the 6 dB minimum
+    assert x_max(one, encoder_headroom=1) == pytest.approx(top)
+    spread = np.stack([one[0], 5 * one[0], one[0]])  # peaks 1, 5, 1 (x top): median 1
+    assert x_max(spread) == pytest.approx(5 * 5 * top)

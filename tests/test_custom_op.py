@@ -111,6 +111,8 @@ WORST = np.where(np.concatenate([_W.real, _W.imag]) >= 0, 1.0, -1.0)
 
 def compile_scaled(graph: Graph, motif: str, target="loihi2", calibration=TONES, **kwargs):
     motifs = {"half": "host"} if motif == "host" else None
+    # run on its own calibration data: the encoder's range is the calibrated one
+    kwargs["options"] = {"encoder_headroom": 1, **kwargs.get("options", {})}
     return compile_graph(graph, target, motifs=motifs, registry=LOWERING,
                          evaluators=EVALUATORS, calibration_inputs={"x": calibration}, **kwargs)
 

@@ -32,7 +32,9 @@ from radar.scene import SCENE_PRESETS, simulate_frame
 
 def compile_time(graph: Graph, calib: dict, **options) -> CompiledProgram:
     """verify → fuse-linear → calibrate → lower, as the default pipeline will run them."""
-    ctx = CompileContext(options={"time_steps": 256, **options}, calibration_inputs=calib,
+    # the bounds below are the code's on the calibrated range: no encoder headroom above it
+    ctx = CompileContext(options={"time_steps": 256, "encoder_headroom": 1, **options},
+                         calibration_inputs=calib,
                          lowering=default_registry())
     return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
                         CompiledProgram(graph=graph))

@@ -23,7 +23,8 @@ _finite = st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=False)
 
 
 def compile_mag(graph: Graph, x: np.ndarray, motif: str, **options) -> CompiledProgram:
-    ctx = CompileContext(options={"time_steps": 128, "motifs": {"mag": motif}, **options},
+    ctx = CompileContext(options={"time_steps": 128, "motifs": {"mag": motif},
+                                  "encoder_headroom": 1, **options},  # hand-worked spike steps
                          calibration_inputs={"x": x}, lowering=default_registry())
     return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
                         CompiledProgram(graph=graph))

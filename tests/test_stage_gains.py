@@ -50,7 +50,9 @@ def rd_graph(n_chirps: int = N_CHIRPS, n_samples: int = N_SAMPLES) -> Graph:
 
 
 def compile_rd(graph: Graph, calib: np.ndarray, **options) -> CompiledProgram:
-    ctx = CompileContext(options={"time_steps": 32, "charging": "constant", **options},
+    # the hand-worked levels below use the calibrated input range (no encoder headroom)
+    ctx = CompileContext(options={"time_steps": 32, "charging": "constant",
+                                  "encoder_headroom": 1, **options},
                          calibration_inputs={"x": calib}, lowering=default_registry())
     return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
                         CompiledProgram(graph=graph))
@@ -271,8 +273,10 @@ def test_demo_scenes_at_default_time_steps(name: str, min_sensitivity: float) ->
     cal = simulate_frame(config, scene, seed=1000).adc
     g = range_doppler_chain(config)
     conv = evaluate(g, {"adc": frame.adc})
+    # the gains' own test: the static part stays on the chip, and with it in the input
+    # code the 6 dB encoder headroom costs these cells (0.95 -> 0.91)
     p = compile_graph(g, None, calibration_inputs={"adc": cal},
-                      options={"static_split": "off"})  # the gains' own test
+                      options={"static_split": "off", "encoder_headroom": 1})
     assert p.networks[0].meta["stage_gains"]["rng"]["axis"] == "range"
     r = run_program(p, {"adc": frame.adc}, out_of_range="clip")  # the demo clips too
     spk, ref = r.values["det"].astype(bool).T, conv["det"].T

@@ -67,7 +67,13 @@ from compiler.lowering.stage_gains import (
     pow2_gains,
     stage_gains,
 )
-from compiler.lowering.time_inputs import encoder_headroom, graded_readout, guard_of, input_rounding
+from compiler.lowering.time_inputs import (
+    TimeInputOptions,
+    encoder_headroom,
+    graded_readout,
+    guard_of,
+    input_rounding,
+)
 from compiler.lowering.values import SpikeValue, Value
 from compiler.quantize_weights import rint_feedback, rint_keep_sums, weight_bits_of
 from compiler.snn import (
@@ -174,7 +180,8 @@ def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str
     host = ctx.to_host(value)
     rec = calibration_of(ctx, host.node, consumer)
     t = _steps(ctx)
-    full = rec.max_part * headroom_of(ctx) * encoder_headroom(rec) or 1.0
+    setting = TimeInputOptions.of(ctx).encoder_headroom
+    full = rec.max_part * headroom_of(ctx) * encoder_headroom(rec, setting) or 1.0
     split: Split = "re_im_signed" if host.type.complex else "signed"
     builder = ctx.builder()
     if builder.has_encoder(host.node):

@@ -11,7 +11,7 @@ Both serve a calibration that transfers to frames the calibration set did not co
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 import networkx as nx
 import numpy as np
@@ -33,7 +33,7 @@ __all__ = ["ENCODER_HEADROOM", "TimeInputOptions", "encoder_headroom", "graded_r
 ENCODER_HEADROOM = 2.0
 
 
-def encoder_headroom(rec: NodeCalibration) -> float:
+def encoder_headroom(rec: NodeCalibration, setting: float | str = "auto") -> float:
     r"""The factor a host encoder's range leaves above a value's calibrated maximum.
 
     The input code is where a new frame is clipped before any processing, and a frame the
@@ -43,7 +43,9 @@ def encoder_headroom(rec: NodeCalibration) -> float:
     .. math:: h = \max\bigl(2,\ \max_f P_f / \operatorname{median}_f P_f\bigr)
 
     (the set's own spread, at least 6 dB); 1 for a range propagated from declared bounds
-    (a worst case).  It costs the input code ``log₂ h`` bits of resolution.
+    (a worst case) and for an input the ``per-input`` policy normalises (its peak is 1).  It costs the input code ``log₂ h`` bits of resolution.  ``setting``
+    (option ``encoder_headroom``) replaces the rule by a fixed factor, e.g. 1 for a chain
+    run on its own calibration data.
 
     Examples
     --------
@@ -53,8 +55,10 @@ def encoder_headroom(rec: NodeCalibration) -> float:
     >>> encoder_headroom(measure("x", np.array([[1.0], [2.0], [10.0]]), axes=("s",)))
     5.0
     """
-    if rec.source == "bounds":
+    if rec.source == "bounds" or rec.normalize_axes:  # a worst case; per slice peak 1
         return 1.0
+    if setting != "auto":
+        return float(setting)
     peaks = np.asarray(rec.frame_peaks, dtype=np.float64)
     median = float(np.median(peaks)) if peaks.size else 0.0
     spread = float(peaks.max()) / median if median > 0 else 1.0
@@ -71,6 +75,8 @@ class TimeInputOptions(BaseModel):
                                   description="a finite number >= 1 (1: no guard)")
     output_spikes: Literal["auto", "time", "graded"] = Field(
         "auto", description="auto, time or graded")
+    encoder_headroom: Literal["auto"] | Annotated[float, Field(ge=1, allow_inf_nan=False)] = Field(
+        "auto", description="auto or a finite number >= 1")
 
     @classmethod
     def of(cls, ctx: LoweringContext) -> TimeInputOptions:
