@@ -43,9 +43,10 @@ def encoder_headroom(rec: NodeCalibration, setting: float | str = "auto") -> flo
     .. math:: h = \max\bigl(2,\ \max_f P_f / \operatorname{median}_f P_f\bigr)
 
     (the set's own spread, at least 6 dB); 1 for a range propagated from declared bounds
-    (a worst case) and for an input the ``per-input`` policy normalises (its peak is 1).  It costs the input code ``log₂ h`` bits of resolution.  ``setting``
-    (option ``encoder_headroom``) replaces the rule by a fixed factor, e.g. 1 for a chain
-    run on its own calibration data.
+    (a worst case) and for an input the ``per-input`` policy normalises (its peak is 1).
+    It costs the input code ``log₂ h`` bits of resolution.  ``setting`` (option
+    ``encoder_headroom``) replaces the rule by a fixed factor, e.g. 1 for a chain run on
+    its own calibration data.
 
     Examples
     --------
