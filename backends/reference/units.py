@@ -63,8 +63,7 @@ def normalized_inputs(program: CompiledProgram) -> dict[str, tuple[str, ...]]:
 
     Examples
     --------
-    >>> from compiler.passes.calibrate import mixed_axes
-from compiler.program import CompiledProgram
+    >>> from compiler.program import CompiledProgram
     >>> from ir import Graph
     >>> normalized_inputs(CompiledProgram(graph=Graph(name="g")))
     {}
