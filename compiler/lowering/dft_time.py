@@ -58,6 +58,8 @@ from compiler.lowering.charging import (
 )
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
+from compiler.lowering.graded import graded_layer
+from compiler.lowering.layer_weights import integer_target, membrane_unit, round_levels
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.stage_gains import (
     exact_weight_bits,
@@ -75,7 +77,7 @@ from compiler.lowering.time_inputs import (
     input_rounding,
 )
 from compiler.lowering.values import SpikeValue, Value
-from compiler.quantize_weights import rint_feedback, rint_keep_sums, weight_bits_of
+from compiler.quantize_weights import weight_bits_of
 from compiler.snn import (
     N_PARTS,
     PART_AXIS,
@@ -266,9 +268,9 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         q = peak / top_level
         levels, rounding = np.rint(stacked / q), ["nearest"] * len(inputs)
         if whole:  # integer weights: keep the rounding error off the strong static inputs
-            levels, rounding = _round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
+            levels, rounding = round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
                                              top_level)
-        unit = _unit(node, q, code_in)
+        unit = membrane_unit(node, q, code_in)
         sched, errors = choose_schedule(t - n_guard, (full_scale or 1.0) / unit,
                                         np.asarray(samples) / unit if samples else None,
                                         mode=mode, whole=whole)
@@ -320,83 +322,6 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
     return ctx.spike_value(node, pop, dec, (e_in, e_out), **code, charging=charging)
 
 
-def graded_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[LayerInput],
-                 *, shape: dict[str, int], split: Split, full_scale: float, motif: str,
-                 gain_axis: str | None, gains: tuple[float, ...], bits: int,
-                 whole: bool) -> SpikeValue:
-    """The layer of :func:`time_layer` read out as one graded spike per neuron.
-
-    The silent stage as there; then input and spiking stay off and each neuron's
-    membrane ``V`` (whole membrane units) is its payload, decoded as ``unit · V`` (``/2``
-    for ± parts: ``V⁺ − V⁻ = 2 M ẑ``).  The weights are coarsened until the largest
-    calibrated ``|V|`` times the guard (:func:`~compiler.lowering.time_inputs.guard_of`,
-    halved down to 8× first) fits the payload and the membrane state.
-    """
-    target = ctx.target
-    width = min(b for b in (getattr(target, "graded_spike_bits", None),
-                            getattr(target, "state_bits", None), 64) if b)
-    limit = float(2 ** (width - 1) - 1)
-    wanted = guard_of(ctx, node, 256)[1]  # the ratio: a read-out layer's, else none
-    stacked = np.concatenate([i.matrix.ravel() for i in inputs])
-    peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
-    top_level = 2 ** (bits - 1) - 1
-    for _ in range(8):  # fewer weight levels until the guarded value fits the payload
-        q = peak / top_level
-        levels, rounding = np.rint(stacked / q), ["nearest"] * len(inputs)
-        if whole:
-            levels, rounding = _round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
-                                             top_level)
-        unit = _unit(node, q, code_in)
-        v_full = (full_scale or 1.0) / unit
-        guard = wanted
-        while v_full * guard > limit and guard / 2 >= min(GUARD_MIN_RATIO, wanted):
-            guard /= 2
-        excess = v_full * guard / limit
-        if excess <= 1.0 or top_level == 1:
-            break
-        top_level = max(1, math.floor(top_level / (excess * 1.01)))
-    bits = max(2, math.ceil(math.log2(top_level + 1)) + 1)
-    e_in = code_in.end
-    phases = (Phase(start_step=0, spiking_on=False),
-              Phase(start_step=e_in, input_on=False, spiking_on=False))
-    params = NeuronParams(du=0.0, dv=0.0, v_th=1.0, reset="fire_once", phases=phases)
-    builder = ctx.builder()
-    pop: Population = builder.population(node, "out", shape, params, motif=motif)
-    offset = 0
-    for i, inp in enumerate(inputs):
-        w = levels[offset:offset + inp.matrix.size].reshape(inp.matrix.shape)
-        offset += inp.matrix.size
-        builder.matrix(node, f"w{i}", inp.source, pop.id, contract=inp.contract,
-                       produce=inp.produce, motif=motif, weights=w)
-    charging = {"kind": "graded", "n_steps": 1, "weight_bits": bits, "unit": unit,
-                "rounding": rounding, "guard": {"ratio": guard, "steps": 0},
-                "payload_bits": width, "v_full": v_full}
-    builder.meta.setdefault("charging", {})[node] = charging
-    gained = {"gain_axis": gain_axis, "gains": tuple(gains)} if gain_axis else {}
-    half = 0.5 if N_PARTS[split] else 1.0
-    dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit * half,
-                  combine=split, node=node, **gained)
-    return ctx.spike_value(node, pop, dec, (e_in, e_in + 1), kind="graded", end=e_in + 1,
-                           split=split, charging=charging)
-
-
-def _unit(node: str, q: float, code_in: TimeCode) -> float:
-    """The layer's membrane unit (value units): the weight step times the input code's."""
-    unit = q * code_in.scale
-    if not (math.isfinite(unit) and unit > 0):
-        raise CompileError(f"node {node!r}: its membrane unit underflows ({q:g} per weight "
-                           f"level x {code_in.scale:g} per input step): the values it carries "
-                           "are too small for floating point; rescale the chain's weights",
-                           node=node)
-    return unit
-
-
-def integer_target(ctx: LoweringContext) -> bool:
-    """Whether the program is quantized for a target with integer weights afterwards (then
-    biases are whole and rounding keeps each column's response to a constant input)."""
-    return getattr(ctx.target, "weight_bits", None) is not None
-
-
 def layer_weight_bits(ctx: LoweringContext, node: str) -> int:
     """Weight width of a time layer: option ``weight_bits``, else the target's, else exact.
 
@@ -419,30 +344,6 @@ def _excess(ctx: LoweringContext, sched, top: float) -> float:
         b_max = ((1 << (b_bits - 1)) - 1) << target.bias_exponent_max
         out = max(out, max(sched.biases) * top / b_max)
     return out
-
-
-def _round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
-                  ) -> tuple[np.ndarray, list[str]]:
-    """Levels of every input matrix for an integer target, and the rule used per input.
-
-    With the calibrated second moment of the input (``feedback``,
-    :func:`~compiler.quantize_weights.rint_feedback`) the rounding error is kept off the
-    strong inputs that repeat in the calibration data; otherwise (``keep_sums``,
-    :func:`~compiler.quantize_weights.rint_keep_sums`) each column's response to a
-    constant input — static returns over chirps or samples — stays exact.
-    """
-    out, rules = [], []
-    for inp in inputs:
-        m = inp.matrix / q
-        h = inp.second_moment
-        if h is not None and h.shape == (m.shape[0], m.shape[0]):
-            out.append(rint_feedback(m, h, w_max).ravel())
-            rules.append("feedback")
-        else:
-            grouped = m.reshape(-1, parts, m.shape[-1])
-            out.append(np.clip(rint_keep_sums(grouped, axis=0), -w_max, w_max).ravel())
-            rules.append("keep_sums")
-    return np.concatenate(out), rules
 
 
 def _host_moment(ctx: LoweringContext, value: Value, axis: str) -> np.ndarray | None:
