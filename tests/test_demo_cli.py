@@ -27,10 +27,19 @@ def test_demo_prints_a_table_and_json(capsys):
     assert main(["demo", "--preset", "carrada", "--conventional-only", "--no-figures"]) == 0
     out = capsys.readouterr().out
     assert "found 4/4 targets" in out and "aliased Doppler" in out
+    # no spiking chain ran: nothing about it (was "spiking MISSED" and "found 0/4")
+    assert "MISSED" not in out and "spiking (" not in out and "0/4" not in out
     assert main(["demo", "--preset", "carrada", "--json", "--conventional-only",
                  "--no-figures"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["scenes"][0]["preset"] == "carrada"
+    assert doc["scenes"][0]["preset"] == "carrada" and doc["scenes"][0]["target"] is None
+
+
+def test_a_conventional_only_summary_does_not_report_a_spiking_chain(tmp_path):
+    run_demo(seed=0, presets=["carrada"], spiking=False, out_dir=tmp_path)
+    text = (tmp_path / "summary.md").read_text(encoding="utf-8")
+    assert "missed" not in text and "- spiking:" not in text and "not run" in text
+    assert "found 4/4" not in text and "4/4 targets" in text
 
 
 def test_validate_accepts_the_examples(capsys):
@@ -103,3 +112,21 @@ def test_run_reads_an_artifact(tmp_path, capsys):
     assert doc["spike_counts"]["out"] == 1
     assert np.load(tmp_path / "y.npz")["y"].tolist() == [1.0]
     assert main(["run", str(tmp_path / "missing"), "--input", str(tmp_path / "x.npy")]) == 2
+
+
+def test_a_closed_pipe_ends_the_command_quietly(monkeypatch, capsys):
+    """`radarsnn schema | head` used to end with "error: [Errno 32] Broken pipe", exit 2."""
+    import sys
+
+    class ClosedPipe:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", ClosedPipe())
+    assert main(["schema"]) == 0
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    assert "Broken pipe" not in err and "error" not in err

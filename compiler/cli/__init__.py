@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from importlib import import_module
@@ -82,6 +83,15 @@ def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
     return 2
 
 
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so the interpreter's final flush cannot fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # not a file descriptor (a test's capture)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 2 on an error, 1 on a failed check)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -91,6 +101,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _error_exit(err, argparse.Namespace(json="--json" in argv))
     try:
         return args.func(args)
+    except BrokenPipeError:  # the reader stopped (`radarsnn schema | head`): it had its output
+        _silence_stdout()
+        return 0
     except (RadarSNNError, OSError) as err:
         if args.debug:
             raise

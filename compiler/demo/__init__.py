@@ -101,20 +101,22 @@ class DemoReport:
             for t in s.targets:
                 conv = f"({t.found_range_bin}, {t.found_doppler_bin})" if t.found else "missed"
                 spk = (f"({t.spiking_range_bin}, {t.spiking_doppler_bin})" if t.found_spiking
-                       else "missed")
+                       else "missed" if s.target is not None else "not run")
                 lines.append(f"| {t.range_m:.2f} | {t.velocity_mps:.2f} | ({t.range_bin}, "
                              f"{t.doppler_bin}) | {conv} | {spk} |")
             lines += ["", f"- conventional: {s.n_found}/{s.n_targets} targets, {s.n_false} false "
-                      f"alarm peaks, {s.n_clutter} clutter peaks",
-                      f"- spiking: {s.spiking_n_found}/{s.n_targets} targets, "
-                      f"{s.spiking_n_false} false alarm peaks; cell sensitivity "
-                      f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
-                      f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
-                      "- resources: " + ", ".join(f"{k} {v}" for k, v in s.resources.items()),
-                      "", f"![RD maps](rd_{s.preset}.png)", "",
-                      f"![spike times](spikes_{s.preset}.png)", "",
-                      f"![cores](cores_{s.preset}.png) — full report: "
-                      f"[report_{s.preset}.md](report_{s.preset}.md)", ""]
+                      f"alarm peaks, {s.n_clutter} clutter peaks"]
+            if s.target is not None:
+                lines += [f"- spiking: {s.spiking_n_found}/{s.n_targets} targets, "
+                          f"{s.spiking_n_false} false alarm peaks; cell sensitivity "
+                          f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
+                          f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
+                          "- resources: " + ", ".join(f"{k} {v}" for k, v in s.resources.items())]
+            lines += ["", f"![RD maps](rd_{s.preset}.png)", ""]
+            if s.target is not None:
+                lines += [f"![spike times](spikes_{s.preset}.png)", "",
+                          f"![cores](cores_{s.preset}.png) — full report: "
+                          f"[report_{s.preset}.md](report_{s.preset}.md)", ""]
         return "\n".join(lines)
 
 
@@ -145,6 +147,8 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
         out.mkdir(parents=True, exist_ok=True)
     for name in presets or PRESETS:
         scene, arrays = run_scene(name, seed, target=target, spiking=spiking, progress=progress)
+        if not spiking:  # no spiking chain ran: nothing to report for it
+            scene.target = None
         report.scenes.append(scene)
         if out is None:
             continue

@@ -1,0 +1,24 @@
+"""The wheel holds the four import packages and nothing the user's runs leave beside them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_package_patterns_match_the_import_packages_only(tmp_path) -> None:
+    setuptools = pytest.importorskip("setuptools")
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    find = config["tool"]["setuptools"]["packages"]["find"]
+    for name in ("ir", "compiler/cli", "backends", "radar"):
+        (tmp_path / name).mkdir(parents=True)
+        (tmp_path / name / "__init__.py").write_text("")
+    for stray in ("radarsnn-demo", "radar_runs", "irdata", "build"):  # what runs leave here
+        (tmp_path / stray).mkdir()
+        (tmp_path / stray / "a.png").write_text("x")
+    found = setuptools.find_namespace_packages(where=tmp_path, include=find["include"])
+    assert sorted(found) == ["backends", "compiler", "compiler.cli", "ir", "radar"]
