@@ -58,6 +58,12 @@ def test_report_reads_a_compiled_artifact(compiled, capsys):
     assert main(["report", str(compiled), "--format", "json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["target"] == "loihi2" and doc["totals"]["neurons"] > 0
+    assert main(["report", str(compiled), "--target", "loihi2", "--format", "json"]) == 0
+    capsys.readouterr()
+    # another target than the artifact's: refused, naming both and the fix (was ignored)
+    assert main(["report", str(compiled), "--target", "spinnaker2"]) == 2
+    err = capsys.readouterr().err
+    assert "compiled for loihi2" in err and "not spinnaker2" in err and "CHAIN.yaml" in err
 
 
 def test_compile_json_summary(tmp_path, capsys):

@@ -171,8 +171,14 @@ def _cmd_report(args: argparse.Namespace) -> int:
             raise RadarSNNError(f"{args.chain} is a directory but not a program artifact "
                                 "(no program.json); give a chain file or `radarsnn compile` output")
         program, note = load_program(args.chain), "from the compiled artifact"
+        stored = getattr(program.target, "name", None)
+        if args.target is not None and args.target != stored:
+            raise RadarSNNError(f"{args.chain} was compiled for {stored or 'no target'}; its "
+                                f"report is for that target, not {args.target}: report the "
+                                f"chain file instead (radarsnn report CHAIN.yaml --target "
+                                f"{args.target})")
     else:
-        program, note = _compile(args, args.target)
+        program, note = _compile(args, args.target or "loihi2")
     report = program.records.get("report")
     if report is None:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
@@ -260,7 +266,7 @@ def add_parsers(sub) -> None:
     p.add_argument("--format", choices=["md", "json"], default="md")
     p.add_argument("--json", action="store_true", help="same as --format json")
     p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
-    p.set_defaults(func=_cmd_report)
+    p.set_defaults(func=_cmd_report, target=None)  # None: loihi2, or an artifact's own
 
     p = sub.add_parser("run", help="simulate a compiled artifact on .npy inputs")
     p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
