@@ -102,6 +102,11 @@ class CompiledProgram:
         """IR nodes evaluated on the host."""
         return [s.node for s in self.segments if s.kind == "host"]
 
+    @property
+    def calibration_policy(self) -> str:
+        """The calibration policy compiled with (``static`` or ``per-input``), also after load."""
+        return str(self.options.get("calibration") or "static")
+
     def segment_of(self, node: str) -> Segment | None:
         """The segment that produces ``node``'s value, or None for a graph input."""
         for seg in self.segments:

@@ -25,16 +25,15 @@ input, or has lost one of those axes, stays in normalised units and is listed in
 Examples
 --------
 >>> import numpy as np
+>>> from backends.reference import run_program
 >>> from compiler.compile import compile_graph
->>> from ir import Graph
->>> g = Graph.from_dict({"name": "x", "nodes": [
-...     {"id": "a", "op": "input", "shape": {"chirp": 2, "sample": 8}},
-...     {"id": "f", "op": "dft", "input": "a", "axis": "sample", "keep": "positive"},
-...     {"id": "o", "op": "output", "input": "f"}]})
+>>> from ir import DFT, Graph, Input, Output
+>>> g = Graph(name="x")
+>>> _ = g.add(Output(), g.add(DFT(axis="sample", keep="positive"),
+...                           g.add(Input(shape={"chirp": 2, "sample": 8}), id="a")))
 >>> x = np.cos(np.arange(8) * np.pi / 2)[None] * np.array([[1.0], [100.0]])
 >>> p = compile_graph(g, calibration="per-input", calibration_inputs={"a": x})
->>> from backends.reference import run_program
->>> np.abs(run_program(p, {"a": x}).outputs["o"]).max(axis=1).round(1).tolist()
+>>> np.abs(run_program(p, {"a": x}).outputs[g.output_ids()[0]]).max(axis=1).round(1).tolist()
 [4.0, 400.0]
 """
 
@@ -71,7 +70,7 @@ def normalized_inputs(program: CompiledProgram) -> dict[str, tuple[str, ...]]:
     inputs = set(program.graph.input_ids())
     out = {e.port: tuple(e.normalize_axes) for net in program.networks for e in net.encoders
            if e.port in inputs and e.normalize_axes}
-    if program.options.get("calibration") == "per-input":
+    if program.calibration_policy == "per-input":
         for node in program.graph.input_ids():
             axes = mixed_axes(program.graph, node)
             if axes:

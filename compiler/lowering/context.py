@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from compiler.lowering.builder import NetworkBuilder
-from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.values import HostValue, SpikeValue, Value
 from compiler.program import Segment
 from compiler.snn import (
@@ -65,6 +65,9 @@ class LoweringContext:
         Nodes that compute the moving part of a static split
         (:mod:`compiler.passes.static_split`): the part of the signal that repeats over
         chirps is on the host.
+    host_pinned : frozenset of str
+        Nodes lowered on the host unless the user chose a motif for that node id (the
+        static split's host path and its moving input).
     """
 
     graph: Graph
@@ -73,6 +76,7 @@ class LoweringContext:
     calibration: dict[str, Any] = field(default_factory=dict)
     target: Any = None
     moving: frozenset[str] = frozenset()
+    host_pinned: frozenset[str] = frozenset()
     types: dict[str, TensorType] = field(init=False)
     values: dict[str, Value] = field(init=False, default_factory=dict)
     _plan: list[_Open | str] = field(init=False, default_factory=list)
@@ -82,10 +86,15 @@ class LoweringContext:
 
     # ------------------------------------------------------------- choices
     def motif_for(self, node: str) -> str:
-        """The motif chosen for ``node``: by node id, then by op name, then the default."""
+        """The motif chosen for ``node``: by node id, host if pinned, by op name, the default."""
         op = self.graph.op(node)
         motifs = self.options.get("motifs") or {}
-        motif = motifs.get(node, motifs.get(op.op, self.registry.default_motif(type(op))))
+        if node in motifs:
+            motif = motifs[node]
+        elif node in self.host_pinned:
+            motif = HOST
+        else:
+            motif = motifs.get(op.op, self.registry.default_motif(type(op)))
         self.registry.rule(type(op), motif, node=node)  # raises a clear error if unknown
         return motif
 

@@ -59,7 +59,7 @@ from compiler.lowering.charging import (
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
 from compiler.lowering.graded import graded_layer
-from compiler.lowering.layer_weights import integer_target, membrane_unit, round_levels
+from compiler.lowering.layer_weights import coarsen, connect_levels, integer_target
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.stage_gains import (
     exact_weight_bits,
@@ -262,15 +262,9 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
     elif mode != "constant":
         n_guard, guard = guard_of(ctx, node, t)
     guard0 = guard
-    peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
-    top_level = 2 ** (bits - 1) - 1
-    for _ in range(8):  # fewer weight levels until threshold and biases fit the target
-        q = peak / top_level
-        levels, rounding = np.rint(stacked / q), ["nearest"] * len(inputs)
-        if whole:  # integer weights: keep the rounding error off the strong static inputs
-            levels, rounding = round_levels(inputs, q, max(1, N_PARTS[code_in.split]),
-                                             top_level)
-        unit = membrane_unit(node, q, code_in)
+
+    def fit(unit: float) -> tuple[float, tuple]:
+        nonlocal guard
         sched, errors = choose_schedule(t - n_guard, (full_scale or 1.0) / unit,
                                         np.asarray(samples) / unit if samples else None,
                                         mode=mode, whole=whole)
@@ -278,12 +272,11 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         while _excess(ctx, guarded, top) > 1.0 and guard / 2 >= min(GUARD_MIN_RATIO, guard0):
             guard /= 2  # a smaller guard before coarser weights: the state must hold its top
             guarded = with_guard(sched, n_guard, guard, whole)
-        sched = guarded
-        excess = _excess(ctx, sched, top)
-        if excess <= 1.0 or top_level == 1:
-            break
-        top_level = max(1, math.floor(top_level / (excess * 1.01)))
-    bits = max(2, math.ceil(math.log2(top_level + 1)) + 1)
+        return _excess(ctx, guarded, top), (guarded, errors, guard)
+
+    fitted = coarsen(node, inputs, stacked, code_in, bits, bool(whole), fit)
+    levels, rounding, unit, bits = fitted.levels, fitted.rounding, fitted.unit, fitted.bits
+    sched, errors, guard = fitted.fitted
     e_in, e_out = code_in.end, code_in.end + t
     phases = (Phase(start_step=0, spiking_on=False),
               *(Phase(start_step=e_in + s, bias=b, input_on=False)
@@ -298,12 +291,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
                           **scales)
     builder = ctx.builder()
     pop: Population = builder.population(node, "out", shape, params, motif=motif)
-    offset = 0
-    for i, inp in enumerate(inputs):
-        w = levels[offset:offset + inp.matrix.size].reshape(inp.matrix.shape)
-        offset += inp.matrix.size
-        builder.matrix(node, f"w{i}", inp.source, pop.id, contract=inp.contract,
-                       produce=inp.produce, motif=motif, weights=w)
+    connect_levels(builder, node, pop.id, inputs, levels, motif)
     charging = {**sched.describe(), "mse": errors, "weight_bits": bits, "unit": unit,
                 "rounding": rounding, "guard": {"ratio": guard, "steps": n_guard},
                 **({"neuron_gains": {"axis": gain_axis, "max_scale": g_top}} if scales else {})}

@@ -7,18 +7,23 @@ its graded read-out (:mod:`compiler.lowering.graded`).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from compiler.lowering.context import LoweringContext
 from compiler.quantize_weights import rint_feedback, rint_keep_sums
+from compiler.snn import N_PARTS
 from ir.errors import CompileError
 
 if TYPE_CHECKING:
+    from compiler.lowering.builder import NetworkBuilder
     from compiler.lowering.dft_time import LayerInput, TimeCode
 
-__all__ = ["integer_target", "membrane_unit", "round_levels"]
+__all__ = ["Coarsened", "coarsen", "connect_levels", "integer_target", "layer_levels",
+           "membrane_unit", "round_levels"]
 
 
 def integer_target(ctx: LoweringContext) -> bool:
@@ -60,3 +65,61 @@ def round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
             out.append(np.clip(rint_keep_sums(grouped, axis=0), -w_max, w_max).ravel())
             rules.append("keep_sums")
     return np.concatenate(out), rules
+
+
+def layer_levels(inputs: list[LayerInput], stacked: np.ndarray, q: float, whole: bool,
+                 parts: int, w_max: int) -> tuple[np.ndarray, list[str]]:
+    """The weight levels of a layer at step ``q``: nearest, or :func:`round_levels` when
+    the target's weights are integers (``whole``)."""
+    if whole:  # integer weights: keep the rounding error off the strong static inputs
+        return round_levels(inputs, q, parts, w_max)
+    return np.rint(stacked / q), ["nearest"] * len(inputs)
+
+
+def connect_levels(builder: NetworkBuilder, node: str, target: str,
+                   inputs: list[LayerInput], levels: np.ndarray, motif: str) -> None:
+    """One matrix projection ``w<i>`` per input into population ``target``, its slice of
+    the stacked ``levels`` as weights."""
+    offset = 0
+    for i, inp in enumerate(inputs):
+        w = levels[offset:offset + inp.matrix.size].reshape(inp.matrix.shape)
+        offset += inp.matrix.size
+        builder.matrix(node, f"w{i}", inp.source, target, contract=inp.contract,
+                       produce=inp.produce, motif=motif, weights=w)
+
+
+@dataclass(frozen=True)
+class Coarsened:
+    """A layer's weights after :func:`coarsen`: stacked levels, rounding rule per input,
+    membrane unit, weight width (bits, sign included) and the fit's own result."""
+
+    levels: np.ndarray
+    rounding: list[str]
+    unit: float
+    bits: int
+    fitted: Any
+
+
+def coarsen(node: str, inputs: list[LayerInput], stacked: np.ndarray, code_in: TimeCode,
+            bits: int, whole: bool, fit: Callable[[float], tuple[float, Any]]) -> Coarsened:
+    """Fewer weight levels until the layer fits its target.
+
+    Starting from ``2**(bits-1) - 1`` levels for the largest weight, ``fit(unit)`` gives
+    the *excess* (the largest value the neuron must hold over what the target holds,
+    ``<= 1`` fits) and its own result for a membrane unit; the top level is divided by
+    the excess (1 % margin) and the levels recomputed, at most 8 times or down to one
+    level.
+    """
+    parts = max(1, N_PARTS[code_in.split])
+    peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
+    top_level = 2 ** (bits - 1) - 1
+    for _ in range(8):
+        q = peak / top_level
+        levels, rounding = layer_levels(inputs, stacked, q, whole, parts, top_level)
+        unit = membrane_unit(node, q, code_in)
+        excess, fitted = fit(unit)
+        if excess <= 1.0 or top_level == 1:
+            break
+        top_level = max(1, math.floor(top_level / (excess * 1.01)))
+    return Coarsened(levels=levels, rounding=rounding, unit=unit, fitted=fitted,
+                     bits=max(2, math.ceil(math.log2(top_level + 1)) + 1))

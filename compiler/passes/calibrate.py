@@ -220,9 +220,10 @@ class Calibrate(Pass):
                     nodes[n] = replace(nodes[n], frames=np.stack(per_node[n]))
             source = "inputs"
         else:
+            given = dict(ctx.options.get("input_bounds") or {})
             bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"
-                      else dict(ctx.options.get("input_bounds") or {}) or adc_full_scales(graph))
-            if bounds and policy == "static" and not ctx.options.get("input_bounds"):
+                      else given or adc_full_scales(graph))
+            if bounds and policy == "static" and not given:
                 warnings.warn(
                     f"calibrate: no calibration data; every range is bounded from the ADC full "
                     f"scale of {', '.join(f'{k!r} ({v:g})' for k, v in bounds.items())} — a worst "

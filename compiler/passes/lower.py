@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from compiler.lowering import LoweringContext, default_registry, lower_graph
-from compiler.lowering.registry import HOST
 from compiler.passes.base import CompileContext, Pass
 from compiler.passes.static_split import host_nodes
 from compiler.program import CompiledProgram
@@ -37,15 +36,10 @@ class Lower(Pass):
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         registry = ctx.lowering or default_registry()
         calibration = program.records.get("calibrate") or {}
-        options = ctx.options
         split = program.records.get("static-split") or []
-        pinned = host_nodes(split)
-        if pinned:  # the static split's host path (and the moving input) run on the host
-            options = {**options, "motifs": {**dict.fromkeys(pinned, HOST),
-                                             **(options.get("motifs") or {})}}
-        lctx = LoweringContext(graph=program.graph, registry=registry, options=options,
+        lctx = LoweringContext(graph=program.graph, registry=registry, options=ctx.options,
                                calibration=getattr(calibration, "nodes", calibration),
-                               target=ctx.target,
+                               target=ctx.target, host_pinned=frozenset(host_nodes(split)),
                                moving=frozenset(n for r in split for n in r["moving"]))
         program.segments = lower_graph(lctx)
         program.records[self.name] = {

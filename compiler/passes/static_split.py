@@ -173,9 +173,13 @@ class StaticSplit(Pass):
     ----------
     mode : {"auto", "off"}
         ``auto`` splits every chain that matches; ``off`` leaves the graph as it is.
+    motifs : tuple of (str, str)
+        The motifs the user chose (node id or op type → motif): a chain with a chosen
+        motif on one of its stages, or a Doppler DFT on the host, is left as it is.
     """
 
     mode: Literal["auto", "off"] = "auto"
+    motifs: tuple[tuple[str, str], ...] = ()
     name = "static-split"
 
     def __post_init__(self) -> None:
@@ -186,13 +190,14 @@ class StaticSplit(Pass):
     @classmethod
     def from_options(cls, options: Mapping[str, Any]) -> StaticSplit:
         """The pass configured by ``compile_graph``'s ``options`` (:class:`StaticSplitOptions`)."""
-        return cls(mode=options.get("static_split") or "auto")
+        return cls(mode=options.get("static_split") or "auto",
+                   motifs=tuple(sorted(dict(options.get("motifs") or {}).items())))
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         mode = self.mode
         record: list[dict[str, Any]] = []
         graph = program.graph
-        motifs = dict(ctx.options.get("motifs") or {})
+        motifs = dict(self.motifs)
         if mode == "auto":
             for dop in graph.topological_order():
                 op = graph.op(dop)
