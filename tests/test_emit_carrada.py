@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -82,3 +83,26 @@ def test_emit_command_on_an_artifact_and_a_chain_file(tmp_path, capsys):
     x = np.random.default_rng(0).normal(size=8)
     out, _ = run_package(pkg, {"x": x})
     assert out["o"].shape == (4,) and np.iscomplexobj(out["o"])
+
+
+def test_emit_command_on_a_compiled_program_folder(tmp_path, capsys):
+    """Issue 19 item 2: ``radarsnn emit build/ti -o build/generated`` (a program, not a network)."""
+    from backends import load_program, save_program
+    from ir import Graph
+
+    graph = Graph.from_yaml(
+        "name: tiny-dft\nnodes:\n  - {id: x, op: input, shape: {sample: 8}}\n"
+        "  - {id: f, op: dft, input: x, axis: sample, keep: positive}\n"
+        "  - {id: o, op: output, input: f}\n")
+    x = np.random.default_rng(1).normal(size=8)
+    program = compile_graph(graph, "unbounded", time_steps=32,
+                            calibration_inputs={"x": np.random.default_rng(2).normal(size=8)})
+    folder = save_program(program, tmp_path / "build" / "ti")
+    parser = argparse.ArgumentParser(prog="radarsnn")
+    add_parsers(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["emit", str(folder), "-o", str(tmp_path / "gen")])
+    assert args.func(args) == 0
+    pkg = Path(capsys.readouterr().out.strip())
+    out, _ = run_package(pkg, {"x": x})
+    ref = run_program(load_program(folder), {"x": x}, mode="step", out_of_range="clip")
+    np.testing.assert_array_equal(out["o"], ref.outputs["o"])

@@ -1,4 +1,5 @@
-"""The wheel holds the four import packages and nothing the user's runs leave beside them."""
+"""The wheel holds the import packages (the four of the design and the public ``radarsnn``),
+marked as typed, and nothing the user's runs leave beside them."""
 
 from __future__ import annotations
 
@@ -14,11 +15,28 @@ def test_the_package_patterns_match_the_import_packages_only(tmp_path) -> None:
     tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
     config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
     find = config["tool"]["setuptools"]["packages"]["find"]
-    for name in ("ir", "compiler/cli", "backends", "radar"):
+    for name in ("ir", "compiler/cli", "backends", "radar", "radarsnn"):
         (tmp_path / name).mkdir(parents=True)
         (tmp_path / name / "__init__.py").write_text("")
     for stray in ("radarsnn-demo", "radar_runs", "irdata", "build"):  # what runs leave here
         (tmp_path / stray).mkdir()
         (tmp_path / stray / "a.png").write_text("x")
     found = setuptools.find_namespace_packages(where=tmp_path, include=find["include"])
-    assert sorted(found) == ["backends", "compiler", "compiler.cli", "ir", "radar"]
+    assert sorted(found) == ["backends", "compiler", "compiler.cli", "ir", "radar", "radarsnn"]
+
+
+def test_the_public_package_is_typed_and_packed() -> None:
+    tomllib = pytest.importorskip("tomllib")
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    assert "py.typed" in config["tool"]["setuptools"]["package-data"]["radarsnn"]
+    assert (ROOT / "radarsnn" / "py.typed").is_file()
+
+
+def test_the_public_names_resolve() -> None:
+    import radarsnn
+
+    missing = [n for n in radarsnn.__all__ if not hasattr(radarsnn, n)]
+    assert not missing
+    assert isinstance(radarsnn.__version__, str) and radarsnn.__version__[0].isdigit()
+    assert issubclass(radarsnn.BudgetError, radarsnn.CompileError)
+    assert issubclass(radarsnn.CompileError, radarsnn.RadarSNNError)

@@ -34,6 +34,7 @@ from backends.emit.numpy_loop import emit_network, import_from
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
 from backends.manifest import radarsnn_version
+from backends.program_artifact import is_program, load_program
 from backends.reference.guards import check_simulation
 from backends.reference.plan import build_plan
 from backends.reference.units import normalized_inputs, unit_plan
@@ -49,6 +50,9 @@ NAMES_FILE = "names.json"
 
 def _as_program(source: object) -> tuple[CompiledProgram | None, list[SpikingNetwork]]:
     if isinstance(source, str | os.PathLike):
+        if is_program(source):  # a compiled program's folder (radarsnn compile -o)
+            program = load_program(source)
+            return program, program.networks
         return None, [load(source)]
     kinds = {SpikingNetwork: lambda s: (None, [s]),
              CompiledProgram: lambda s: (s, s.networks)}

@@ -1,0 +1,53 @@
+"""radarsnn's public face: compile a radar DSP chain into a spiking network and run it.
+
+The project's own packages stay where the design puts them (``ir``, ``compiler``,
+``backends``, ``radar``); this package gathers what a user needs first under one name.
+
+Examples
+--------
+>>> import numpy as np
+>>> import radarsnn
+>>> g = radarsnn.Graph(name="sq")
+>>> _ = g.add(radarsnn.Output(), g.add(radarsnn.Magnitude(kind="square"),
+...                                    g.add(radarsnn.Input(shape={"range": 3}), id="a")))
+>>> program = radarsnn.compile_graph(g, target=None)
+>>> radarsnn.run_program(program, {"a": np.array([1.0, -2.0, 3.0])}).outputs[
+...     g.output_ids()[0]].tolist()
+[1.0, 4.0, 9.0]
+>>> isinstance(radarsnn.__version__, str)
+True
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+from backends import load, load_program, save, save_program
+from backends.reference import run_program, simulate
+from compiler.compile import compile_graph
+from compiler.program import CompiledProgram
+from ir import Graph, evaluate
+from ir.errors import (
+    ArtifactError,
+    BudgetError,
+    ChainFileError,
+    CompileError,
+    IRError,
+    NetworkError,
+    RadarConfigError,
+    RadarSNNError,
+    SimulationError,
+)
+from ir.ops import DFT, Input, Magnitude, Output, Window
+
+try:
+    __version__ = version("radarsnn")
+except PackageNotFoundError:  # run from a source tree that was never installed
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "DFT", "ArtifactError", "BudgetError", "ChainFileError", "CompileError", "CompiledProgram",
+    "Graph", "IRError", "Input", "Magnitude", "NetworkError", "Output", "RadarConfigError",
+    "RadarSNNError", "SimulationError", "Window", "__version__", "compile_graph", "evaluate",
+    "load", "load_program", "run_program", "save", "save_program", "simulate",
+]
