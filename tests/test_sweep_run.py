@@ -183,3 +183,9 @@ def test_command_runs_and_prints_json(maps, tmp_path, capsys):
     assert args.func(args) == 0
     text = capsys.readouterr().out
     assert "cfar.sensitivity" in text and "0 cells run, 12 skipped" in text
+
+
+def test_no_progress_bar_when_stderr_is_not_a_terminal(maps, tmp_path, capsys):
+    """Issue 19 item 8: a sweep logged to a file draws no tqdm bar (it did: ``\\r``-joined bars)."""
+    run_sweep(_spec(maps), tmp_path / "out", scheduler="sync", quiet=False, max_cells=2)
+    assert "\r" not in capsys.readouterr().err

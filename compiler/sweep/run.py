@@ -227,7 +227,9 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
     n_run = 0
     if todo and max_cells != 0:
         ex = SyncExecutor() if scheduler == "sync" else DaskExecutor(scheduler, workers, processes)
-        bar = tqdm(total=len(todo), desc=spec.name, unit="cell", disable=quiet, file=sys.stderr)
+        # disable=None: no bar when stderr is not a terminal (a log file, a CI job)
+        bar = tqdm(total=len(todo), desc=spec.name, unit="cell", disable=True if quiet else None,
+                   file=sys.stderr)
         try:
             futures = _submit(ex, spec, plan, todo, registry)
             for fut in ex.as_completed(futures):
