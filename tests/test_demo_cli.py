@@ -11,6 +11,7 @@ import pytest
 from compiler.chains import range_doppler_chain
 from compiler.cli import main
 from compiler.demo import run_demo
+from ir.errors import RadarSNNError
 from radar.config import preset
 
 CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
@@ -130,3 +131,15 @@ def test_a_closed_pipe_ends_the_command_quietly(monkeypatch, capsys):
     monkeypatch.undo()
     err = capsys.readouterr().err
     assert "Broken pipe" not in err and "error" not in err
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_debug_is_accepted_before_and_after_the_command(tmp_path, capsys, where):
+    """Issue 19 item 8: ``radarsnn validate X --debug`` was refused ('unrecognized arguments')."""
+    missing = str(tmp_path / "missing.yaml")
+    argv = ["--debug", "validate", missing] if where == "before" else ["validate", missing,
+                                                                        "--debug"]
+    with pytest.raises(RadarSNNError, match="cannot read the chain file"):
+        main(argv)
+    assert main(["validate", missing]) == 2  # without it: the one-line error
+    assert capsys.readouterr().err.startswith("error: ")
