@@ -27,17 +27,8 @@ from backends.reference import run_program, simulate
 from compiler.compile import compile_graph
 from compiler.program import CompiledProgram
 from ir import Graph, evaluate
-from ir.errors import (
-    ArtifactError,
-    BudgetError,
-    ChainFileError,
-    CompileError,
-    IRError,
-    NetworkError,
-    RadarConfigError,
-    RadarSNNError,
-    SimulationError,
-)
+from ir import errors as _errors
+from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
 from ir.ops import DFT, Input, Magnitude, Output, Window
 
 try:
@@ -46,8 +37,7 @@ except PackageNotFoundError:  # run from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
 __all__ = [
-    "DFT", "ArtifactError", "BudgetError", "ChainFileError", "CompileError", "CompiledProgram",
-    "Graph", "IRError", "Input", "Magnitude", "NetworkError", "Output", "RadarConfigError",
-    "RadarSNNError", "SimulationError", "Window", "__version__", "compile_graph", "evaluate",
-    "load", "load_program", "run_program", "save", "save_program", "simulate",
+    "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
+    "compile_graph", "evaluate", "load", "load_program", "run_program", "save", "save_program",
+    "simulate", *_errors.__all__,
 ]
