@@ -254,9 +254,12 @@ def load_program(directory: str | Path) -> CompiledProgram:
         report = manifest["report"]
         records = {} if report is None else {"report": Report(_json_field(manifest, "report",
                                                                            path))}
-        program = CompiledProgram(graph=graph, segments=segments,
-                                  options=dict(manifest["options"]), records=records,
-                                  target=profile)
+        options = dict(manifest["options"])
+        policy = options.get("calibration") or "static"
+        if policy not in ("static", "per-input"):
+            raise ArtifactError(f"{path}: unknown calibration policy {short_repr(policy)}")
+        program = CompiledProgram(graph=graph, segments=segments, options=options,
+                                  records=records, target=profile, calibration_policy=policy)
         check_program(program)
     except ArtifactError:
         raise

@@ -78,11 +78,52 @@ EXTRA_OPTIONS = {
 
 
 def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
-    """The passes ``compile_graph`` runs, in order (the allocation passes need a target)."""
-    passes: list[Pass] = [Verify(), FuseLinear(), StaticSplit.from_options(options), Calibrate(),
-                          Lower()]
+    """The passes ``compile_graph`` runs, in order (the allocation passes need a target).
+
+    The one place where the compile options become the passes' typed fields (a pass
+    never reads the options mapping); the motifs' own options reach them through
+    :class:`~compiler.lowering.LoweringContext`.
+
+    Parameters
+    ----------
+    options : mapping
+        Checked compile options (:func:`compiler.option_checks.check_options`); absent
+        ones take the pass's default.
+    hardware : bool
+        Add the allocation passes (quantize, split, place, report).
+
+    Raises
+    ------
+    CompileError
+        A pass refuses its option's value (e.g. an unknown calibration policy).
+
+    Examples
+    --------
+    >>> [p.name for p in default_pipeline({"calibration": "per-input"})]
+    ['verify', 'fuse-linear', 'static-split', 'calibrate', 'lower']
+    >>> default_pipeline({"headroom": 2})[3].headroom
+    2.0
+    """
+    opts = {k: v for k, v in options.items() if v is not None}
+    split = StaticSplitOptions.model_validate(
+        {k: opts[k] for k in StaticSplitOptions.model_fields if k in opts})
+    passes: list[Pass] = [
+        Verify(), FuseLinear(),
+        StaticSplit(mode=split.static_split,
+                    motifs=tuple(sorted(dict(opts.get("motifs", {})).items()))),
+        Calibrate(policy=str(opts.get("calibration", "static")),
+                  headroom=float(opts.get("headroom", 1.0)),
+                  input_bounds=tuple((str(k), float(v))
+                                     for k, v in dict(opts.get("input_bounds", {})).items()),
+                  max_memory_bytes=limits_from_options(opts)[0]),
+        Lower()]
     if hardware:
-        passes += [Quantize(), Split(), Place(), ReportPass()]
+        mode = str(opts.get("repetitions", "auto"))
+        passes += [Quantize(long_delays=opts.get("long_delays", "relay")),
+                   Split(repetitions=mode), Place(repetitions=mode),
+                   ReportPass(frame_rate_hz=opts.get("frame_rate_hz"),
+                              real_bits=int(opts.get("real_bits", 16)),
+                              n_angle_bins=int(opts.get("n_angle_bins", 256)))]
     return passes
 
 
@@ -170,7 +211,8 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
                          evaluators=dict(evaluators or {}))
     if progress is not None:
         ctx.progress = progress
-    program = CompiledProgram(graph=graph, options=options, target=profile)
+    program = CompiledProgram(graph=graph, options=options, target=profile,
+                              calibration_policy=calibration)
     program = run_pipeline(default_pipeline(options, hardware=profile is not None), ctx, program)
     _check_host_implementations(program, impls)
     return program

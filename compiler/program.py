@@ -83,6 +83,9 @@ class CompiledProgram:
         ``ir.EVAL_REGISTRY`` lacks, given to ``compile_graph(..., evaluators=)``:
         the host segments run with them.  Code, not data: never saved in an
         artifact (a loaded program knows the built-in ops only).
+    calibration_policy : {"static", "per-input"}
+        The calibration policy compiled with (set by ``compile_graph`` and by
+        :func:`backends.load_program` from the stored options).
     """
 
     graph: Graph
@@ -91,6 +94,7 @@ class CompiledProgram:
     records: dict[str, Any] = field(default_factory=dict)
     target: Any = None
     evaluators: dict[type, Any] = field(default_factory=dict)
+    calibration_policy: Literal["static", "per-input"] = "static"
 
     @property
     def networks(self) -> list[SpikingNetwork]:
@@ -101,11 +105,6 @@ class CompiledProgram:
     def host_nodes(self) -> list[str]:
         """IR nodes evaluated on the host."""
         return [s.node for s in self.segments if s.kind == "host"]
-
-    @property
-    def calibration_policy(self) -> str:
-        """The calibration policy compiled with (``static`` or ``per-input``), also after load."""
-        return str(self.options.get("calibration") or "static")
 
     def segment_of(self, node: str) -> Segment | None:
         """The segment that produces ``node``'s value, or None for a graph input."""

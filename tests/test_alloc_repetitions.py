@@ -51,8 +51,8 @@ def two_stage(w_b: np.ndarray | None = None) -> SpikingNetwork:
 def run(net, profile, mode="auto"):
     prog = CompiledProgram(graph=None, segments=[
         Segment(kind="spiking", inputs=[], outputs=[], network=net)])
-    ctx = CompileContext(target=profile, options={"repetitions": mode})
-    return Place().apply(ctx, Split().apply(ctx, prog))
+    ctx = CompileContext(target=profile)
+    return Place(repetitions=mode).apply(ctx, Split(repetitions=mode).apply(ctx, prog))
 
 
 def test_stages_axes_and_instances_by_hand():
@@ -163,8 +163,10 @@ def test_nothing_repeated_left_to_multiplex_says_so():
 
 def test_bad_options_raise_compile_error():
     with pytest.raises(CompileError, match=r"'repetitions' = 'sometimes' is not one of auto"):
-        repetition_mode({"repetitions": "sometimes"})
-    assert repetition_mode({}) == "auto"
+        repetition_mode("sometimes")
+    with pytest.raises(CompileError, match=r"'repetitions' = 'sometimes' is not one of auto"):
+        Split(repetitions="sometimes")  # refused when the pipeline is made, before any pass runs
+    assert repetition_mode("auto") == "auto"
     with pytest.raises(CompileError, match=r"stage 'det' cannot be time-multiplexed"):
         split(os_cfar_network(16, 32), multiplexed={"det"})
 

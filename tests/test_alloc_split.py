@@ -160,8 +160,8 @@ def allocate(net, profile, mode):
     """The Split and Place passes (with auto's escalation) on one network."""
     prog = CompiledProgram(graph=None, segments=[
         Segment(kind="spiking", inputs=[], outputs=[], network=net)])
-    ctx = CompileContext(target=profile, options={"repetitions": mode})
-    prog = Place().apply(ctx, Split().apply(ctx, prog))
+    ctx = CompileContext(target=profile)
+    prog = Place(repetitions=mode).apply(ctx, Split(repetitions=mode).apply(ctx, prog))
     return prog.records["split"][0], prog.records["placement"]
 
 

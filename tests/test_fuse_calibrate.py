@@ -9,8 +9,9 @@ from hypothesis import strategies as st
 
 from backends.reference import simulate
 from compiler.chains import range_doppler_chain
+from compiler.compile import default_pipeline
 from compiler.passes import CompileContext
-from compiler.passes.calibrate import Calibrate, mixed_axes
+from compiler.passes.calibrate import mixed_axes
 from compiler.passes.fuse_linear import FuseLinear
 from compiler.program import CompiledProgram
 from compiler.snn import Decoder, Encoder, LatencyCode, Population, SpikingNetwork
@@ -24,8 +25,10 @@ def fuse(graph: Graph) -> CompiledProgram:
 
 
 def calibrate(graph: Graph, calib=None, **options) -> CompiledProgram:
-    ctx = CompileContext(options=options, calibration_inputs=calib or {})
-    return Calibrate().apply(ctx, CompiledProgram(graph=graph))
+    """The calibrate pass as ``compile_graph`` configures it from ``options``."""
+    ctx = CompileContext(calibration_inputs=calib or {})
+    (calibrate_pass,) = [p for p in default_pipeline(options) if p.name == "calibrate"]
+    return calibrate_pass.apply(ctx, CompiledProgram(graph=graph))
 
 
 def chain(*nodes: dict, shape=None, complex_in=True) -> Graph:

@@ -22,14 +22,13 @@ from ir.errors import BudgetError
 
 ROOT = Path(__file__).resolve().parents[1]
 CARRADA = ROOT / "examples" / "chains" / "carrada_rd_oscfar.yaml"
-PASSES = [Quantize(), Split(), Place(), ReportPass()]
-
-
 def compiled(net, target: str, repetitions: str = "auto") -> CompiledProgram:
     prog = CompiledProgram(graph=Graph.from_yaml(CARRADA), segments=[
         Segment(kind="spiking", inputs=["rd"], outputs=["det"], network=net)])
-    ctx = CompileContext(target=load_profile(target), options={"repetitions": repetitions})
-    return run_pipeline(PASSES, ctx, prog)
+    ctx = CompileContext(target=load_profile(target))
+    passes = [Quantize(), Split(repetitions=repetitions), Place(repetitions=repetitions),
+              ReportPass()]
+    return run_pipeline(passes, ctx, prog)
 
 
 def test_carrada_os_cfar_stand_in_on_loihi():

@@ -1,6 +1,6 @@
 r"""The ``calibrate`` pass: value ranges per node, from which motifs set encoders and thresholds.
 
-Policies (compile option ``calibration``):
+Policies (compile option ``calibration``, the pass's field ``policy``):
 
 ``static``
     Ranges from the calibration inputs (``CompileContext.calibration_inputs``,
@@ -8,6 +8,8 @@ Policies (compile option ``calibration``):
     none are given, propagated from declared input bounds (option
     ``input_bounds``: input node id → largest ``|Re|``/``|Im|``).  Nothing adapts
     at run time; the motifs scale by ``headroom`` (option ``headroom``, default 1).
+    The pass's fields hold these options; ``compile_graph`` sets them
+    (:func:`compiler.compile.default_pipeline`).
 ``per-input``
     Each graph input's encoder normalises every slice over the axes that the
     chain later mixes (those contracted by ``dft``/``linear`` or summed by
@@ -38,8 +40,8 @@ Examples
 >>> rec = Calibrate().apply(ctx, CompiledProgram(graph=g)).records["calibrate"]
 >>> rec.policy, rec.nodes["f"].max_re, rec.nodes["f"].max_im
 ('static', 2.0, 0.0)
->>> ctx = CompileContext(options={"calibration": "per-input"})
->>> rec = Calibrate().apply(ctx, CompiledProgram(graph=g)).records["calibrate"]
+>>> rec = Calibrate(policy="per-input").apply(CompileContext(), CompiledProgram(graph=g))
+>>> rec = rec.records["calibrate"]
 >>> rec.source, rec.nodes["a"].normalize_axes, rec.nodes["f"].max_part
 ('bounds', ('sample',), 4.0)
 """
@@ -54,7 +56,7 @@ import networkx as nx
 import numpy as np
 
 from compiler.calibration import Calibration, NodeCalibration, measure, second_moment
-from compiler.guards import limits_from_options
+from compiler.guards import MAX_MEMORY_BYTES
 from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
@@ -181,27 +183,45 @@ class Calibrate(Pass):
     motifs compile unchanged, and a motif that needs a range raises a
     :class:`~ir.errors.CompileError` naming the node and the fix.
 
+    Attributes
+    ----------
+    policy : {"static", "per-input"}
+        The calibration policy (compile option ``calibration``).
+    headroom : float
+        Factor >= 1 the motifs scale the measured ranges by (option ``headroom``).
+    input_bounds : tuple of (str, float)
+        Input node id and its largest ``|Re|``/``|Im|``, used when no calibration
+        inputs are given (option ``input_bounds``).
+    max_memory_bytes : int or None
+        The compile memory limit the calibration evaluation runs under (option
+        ``max_memory_bytes``; None: no limit).
+
     Raises
     ------
     CompileError
-        For an unknown policy or a bad headroom.
+        For an unknown policy or a bad headroom (when the pass is made).
     """
 
     name = "calibrate"
+    policy: str = "static"
+    headroom: float = 1.0
+    input_bounds: tuple[tuple[str, float], ...] = ()
+    max_memory_bytes: int | None = MAX_MEMORY_BYTES
+
+    def __post_init__(self) -> None:
+        if self.policy not in _POLICIES:
+            raise CompileError(f"calibration={self.policy!r} is not a policy; use 'static' or "
+                               "'per-input'")
+        if not (math.isfinite(self.headroom) and self.headroom >= 1.0):
+            raise CompileError(f"headroom={self.headroom} must be a finite number >= 1")
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        policy = ctx.options.get("calibration") or "static"
-        headroom = float(ctx.options.get("headroom") or 1.0)
-        if policy not in _POLICIES:
-            raise CompileError(f"calibration={policy!r} is not a policy; use 'static' or "
-                               "'per-input'")
-        if not (math.isfinite(headroom) and headroom >= 1.0):
-            raise CompileError(f"headroom={headroom} must be a finite number >= 1")
+        policy, headroom = self.policy, float(self.headroom)
         graph, types = program.graph, program.graph.infer_types()
         norm = {n: mixed_axes(graph, n) if policy == "per-input" else ()
                 for n in graph.input_ids()}
         if ctx.calibration_inputs:
-            limit = limits_from_options(ctx.options)[0]  # the compile option max_memory_bytes
+            limit = self.max_memory_bytes
             frames, n_frames = _frames(graph, dict(ctx.calibration_inputs))
             per_node: dict[str, list[np.ndarray]] = {}
             for frame in frames:
@@ -220,7 +240,7 @@ class Calibrate(Pass):
                     nodes[n] = replace(nodes[n], frames=np.stack(per_node[n]))
             source = "inputs"
         else:
-            given = dict(ctx.options.get("input_bounds") or {})
+            given = dict(self.input_bounds)
             bounds = ({n: 1.0 for n in graph.input_ids()} if policy == "per-input"
                       else given or adc_full_scales(graph))
             if bounds and policy == "static" and not given:

@@ -194,14 +194,20 @@ class Place(Pass):
     ----------
     placer : Placer
         The placement function.
+    repetitions : {"auto", "spatial", "temporal"}
+        The ``repetitions`` option, as :class:`~compiler.passes.split.Split`'s.
     """
 
     name: ClassVar[str] = "place"
     placer: Placer = greedy_placer
+    repetitions: str = "auto"
+
+    def __post_init__(self) -> None:
+        repetition_mode(self.repetitions)
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)
-        mode = repetition_mode(ctx.options)
+        mode = self.repetitions
         networks = program.networks
         splits = program.records.get("split") or split_program(networks, profile, mode)
         cands = multiplex_candidates(networks, profile)

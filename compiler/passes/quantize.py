@@ -325,7 +325,7 @@ class Quantize(Pass):
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)
-        mode = ctx.options.get("long_delays", self.long_delays)
+        mode = self.long_delays
         records, segments = [], []
         for seg in program.segments:
             if seg.kind == "spiking" and seg.network is not None:

@@ -28,18 +28,25 @@ __all__ = ["ReportPass"]
 class ReportPass(Pass):
     """Store :func:`compiler.report.build_report` of the program under ``records["report"]``.
 
-    Options read from ``ctx.options``: ``frame_rate_hz``, ``real_bits`` (16), ``n_angle_bins``
-    (256).
+    Attributes
+    ----------
+    frame_rate_hz : float, optional
+        Frames per second (compile option ``frame_rate_hz``; None: the chain's or 10).
+    real_bits : int
+        Bits per real sample of frame I/O (option ``real_bits``).
+    n_angle_bins : int
+        Angle bins of the RA map (option ``n_angle_bins``).
     """
 
     name: ClassVar[str] = "report"
+    frame_rate_hz: float | None = None
+    real_bits: int = 16
+    n_angle_bins: int = 256
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        opts = ctx.options
         if program.target is None and ctx.target is not None:
             program.target = ctx.target
         program.records[self.name] = build_report(
-            program, frame_rate_hz=opts.get("frame_rate_hz"),
-            real_bits=int(opts.get("real_bits", 16)),
-            n_angle_bins=opts.get("n_angle_bins", 256))
+            program, frame_rate_hz=self.frame_rate_hz, real_bits=int(self.real_bits),
+            n_angle_bins=self.n_angle_bins)
         return program

@@ -262,13 +262,22 @@ class Split(Pass):
     """Split the program's networks (:func:`split_program`, option ``repetitions``).
 
     Records ``records["split"]``: one :class:`SplitRecord` per network.
+
+    Attributes
+    ----------
+    repetitions : {"auto", "spatial", "temporal"}
+        How repeated stages are laid out (compile option ``repetitions``).
     """
 
     name: ClassVar[str] = "split"
+    repetitions: str = "auto"
+
+    def __post_init__(self) -> None:
+        repetition_mode(self.repetitions)
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)
-        mode = repetition_mode(ctx.options)
+        mode = self.repetitions
         ctx.progress(self.name, f"{len(program.networks)} network(s), repetitions={mode}")
         program.records[self.name] = split_program(program.networks, profile, mode)
         return program

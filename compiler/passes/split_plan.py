@@ -51,15 +51,14 @@ def multiplex_candidates(networks: Sequence[SpikingNetwork], profile: HardwarePr
     return [(k, st) for *_, k, _, st in sorted(found, key=lambda f: f[:4])]
 
 
-def repetition_mode(options) -> str:
-    """The ``repetitions`` option (default ``"auto"``), checked.
+def repetition_mode(mode: str) -> str:
+    """The ``repetitions`` option ``mode``, checked.
 
     Raises
     ------
     CompileError
         Not one of :data:`REPETITION_MODES`.
     """
-    mode = options.get("repetitions") or "auto"
     if mode not in REPETITION_MODES:
         raise CompileError(f"compile option 'repetitions' = {mode!r} is not one of "
                            f"{', '.join(REPETITION_MODES)}")

@@ -51,7 +51,6 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -186,12 +185,6 @@ class StaticSplit(Pass):
         if self.mode not in MODES:
             raise CompileError(f"static_split={self.mode!r} is not a mode; use one of "
                                f"{', '.join(MODES)}")
-
-    @classmethod
-    def from_options(cls, options: Mapping[str, Any]) -> StaticSplit:
-        """The pass configured by ``compile_graph``'s ``options`` (:class:`StaticSplitOptions`)."""
-        return cls(mode=options.get("static_split") or "auto",
-                   motifs=tuple(sorted(dict(options.get("motifs") or {}).items())))
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         mode = self.mode
