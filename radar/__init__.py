@@ -1,7 +1,9 @@
 """The radar domain: configurations and presets, a seeded FMCW scene simulator,
-loaders for real captures, and the conventional DSP/CFAR reference.
+loaders for real captures, readers of files on disk (TI raw ``.bin``, ``.mat``, ``.npz``),
+and the conventional DSP/CFAR reference.
 
 Submodules: :mod:`radar.config`, :mod:`radar.scene`, :mod:`radar.loaders`,
+:mod:`radar.ti_capture`, :mod:`radar.readers`,
 :mod:`radar.windows`, :mod:`radar.dsp`, :mod:`radar.spectra`, :mod:`radar.cfar_window`,
 :mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
 ``radar.cfar.cfar``; the package does not re-export it, so ``radar.cfar`` stays
@@ -14,8 +16,10 @@ from radar.cfar_window import n_training, training_mask
 from radar.config import PRESETS, RadarConfig, preset
 from radar.dsp import dft, dft_matrix, magnitude, to_db
 from radar.loaders import load_openradar, load_ti_chirps
+from radar.readers import read_mat_array, read_npz_array
 from radar.scene import SCENE_PRESETS, Frame, Scene, Target, simulate_frame
 from radar.spectra import range_doppler_map
+from radar.ti_capture import TiBinLayout, read_ti_bin
 from radar.windows import apply_window
 
 __all__ = [
@@ -25,6 +29,7 @@ __all__ = [
     "RadarConfig",
     "Scene",
     "Target",
+    "TiBinLayout",
     "apply_window",
     "ca_alpha",
     "ca_pfa",
@@ -39,6 +44,9 @@ __all__ = [
     "os_pfa",
     "preset",
     "range_doppler_map",
+    "read_mat_array",
+    "read_npz_array",
+    "read_ti_bin",
     "simulate_frame",
     "to_db",
     "training_mask",

@@ -1,40 +1,128 @@
-"""``.npy`` arrays named on the command line (``radarsnn run -i``, ``--calibration``): read
-without unpickling, the header checked before numpy allocates anything.
+"""Arrays named on the command line (``radarsnn run -i``, ``--calibration``): read without
+unpickling, each file's header checked before numpy allocates anything.
+
+``[PORT=]FILE`` where FILE is ``X.npy``; ``X.npz`` (its only array) or ``X.npz:KEY`` — so
+``radarsnn run -o out.npz`` can be read back; ``X.mat`` or ``X.mat:VAR`` (MATLAB v4–v7,
+:func:`radar.readers.read_mat_array`); or a raw TI capture ``X.bin`` read with the layout
+given by ``--bin-layout`` (:func:`radar.ti_capture.read_ti_bin`; a capture of one frame gives
+``[rx, chirp, sample]``, of several ``[frame, rx, chirp, sample]``).
 """
 
 from __future__ import annotations
 
+import argparse
+import re
+
 from ir.errors import RadarSNNError
 
-__all__ = ["MAX_NPY_BYTES", "load_arrays", "read_npy"]
+__all__ = ["INPUT_FORMS", "MAX_NPY_BYTES", "load_arrays", "read_input", "read_npy"]
 
 #: Largest array a ``.npy`` input may declare: 4 GiB (the artifacts' array limit; a bigger
 #: input could not be simulated within the default memory limit anyway).
 MAX_NPY_BYTES = 4 << 30
 
+#: The input forms, for help texts and messages.
+INPUT_FORMS = "X.npy, X.npz[:KEY], X.mat[:VAR] or a TI X.bin (with --bin-layout)"
 
-def load_arrays(items: list[str], ports: list[str], what: str) -> dict:
-    """``[PORT=]FILE.npy`` arguments → arrays by port (a bare file needs exactly one port).
+_KEYED = re.compile(r"^(?P<path>.+\.(?:npz|mat)):(?P<key>[^:/\\]+)$", re.IGNORECASE)
+
+
+def load_arrays(items: list[str], ports: list[str], what: str, *,
+                bin_layout: str | None = None) -> dict:
+    """``[PORT=]FILE`` arguments → arrays by port (a bare file needs exactly one port).
+
+    Parameters
+    ----------
+    items : list of str
+        The arguments, FILE as in :func:`read_input`.
+    ports : list of str
+        The input ports (input node ids) of the chain or artifact.
+    what : str
+        Names the chain or artifact in messages.
+    bin_layout : str, optional
+        ``--bin-layout`` for ``.bin`` inputs (:meth:`radar.ti_capture.TiBinLayout.parse`).
 
     Raises
     ------
     RadarSNNError
-        An unknown port, a bare file with several ports, or a file that is not
-        a readable ``.npy`` array (pickled object arrays are refused).
-    """
+        An unknown port, a port given twice, a bare file with several ports, a file that
+        cannot be read as its form (pickled object arrays are refused), a ``.bin`` input
+        without ``--bin-layout`` or ``--bin-layout`` without one.
 
-    arrays = {}
+    Examples
+    --------
+    >>> load_arrays(["adc=x.npy", "adc=y.npy"], ["adc"], "chain c")
+    Traceback (most recent call last):
+    ...
+    ir.errors.RadarSNNError: chain c: input port 'adc' is given twice ('adc=x.npy' and \
+'adc=y.npy'); give each port once
+    """
+    given: dict[str, tuple[str, str]] = {}  # port -> (argument, file)
     for item in items:
-        port, sep, path = item.rpartition("=")
+        port, sep, path = item.partition("=")
         if not sep:
             if len(ports) != 1:
-                raise RadarSNNError(f"{what} has input ports {ports}; name one as PORT=FILE.npy "
+                raise RadarSNNError(f"{what} has input ports {ports}; name one as PORT=FILE "
                                     f"(got {item!r})")
             port, path = ports[0], item
         if port not in ports:
             raise RadarSNNError(f"{what} has no input port {port!r}; its ports are {ports}")
-        arrays[port] = read_npy(path, f"input {path!r} for port {port!r}")
-    return arrays
+        if port in given:
+            raise RadarSNNError(f"{what}: input port {port!r} is given twice "
+                                f"({given[port][0]!r} and {item!r}); give each port once")
+        given[port] = (item, path)
+    if bin_layout is not None and not any(_split(path)[0].lower().endswith(".bin")
+                                          for _, path in given.values()):
+        raise RadarSNNError(f"--bin-layout {bin_layout!r} is given but no input is a .bin "
+                            "capture; drop it, or give the capture as PORT=X.bin")
+    if bin_layout is not None:  # its own errors first, before any file is read
+        from radar.ti_capture import TiBinLayout
+
+        bin_layout = TiBinLayout.parse(bin_layout)
+    return {port: read_input(path, port, bin_layout=bin_layout)
+            for port, (_, path) in given.items()}
+
+
+def _split(spec: str) -> tuple[str, str | None]:
+    """``X.npz:KEY`` → (``X.npz``, ``KEY``); anything else → (spec, None)."""
+    match = _KEYED.match(spec)
+    return (match["path"], match["key"]) if match else (spec, None)
+
+
+def read_input(spec: str, port: str, *, bin_layout=None):
+    """The array for input ``port`` from ``X.npy``, ``X.npz[:KEY]``, ``X.mat[:VAR]`` or ``X.bin``.
+
+    Raises
+    ------
+    RadarSNNError
+        As :func:`read_npy`, :func:`radar.readers.read_npz_array`,
+        :func:`radar.readers.read_mat_array` and :func:`radar.ti_capture.read_ti_bin`
+        (their messages, which name the file, prefixed with the port); a ``.bin`` without
+        ``bin_layout`` (a :class:`radar.ti_capture.TiBinLayout` or its ``--bin-layout``
+        spelling).
+    """
+    path, key = _split(spec)
+    suffix = path.lower().rpartition(".")[2]
+    if suffix not in ("npz", "mat", "bin"):
+        return read_npy(path, f"input {path!r} for port {port!r}")
+    from radar.readers import read_mat_array, read_npz_array
+    from radar.ti_capture import TiBinLayout, read_ti_bin
+
+    try:
+        if suffix == "npz":
+            return read_npz_array(path, key)
+        if suffix == "mat":
+            return read_mat_array(path, key)
+        if bin_layout is None:
+            raise RadarSNNError(f"{path} is a raw TI capture: give its layout, e.g. "
+                                "--bin-layout samples=256,chirps=128,rx=4[,tx=2][,real]"
+                                "[,device=xwr14xx] (docs/cli.md, Inputs)")
+        layout = (bin_layout if isinstance(bin_layout, TiBinLayout)
+                  else TiBinLayout.parse(bin_layout))
+        adc = read_ti_bin(path, layout)
+        return adc[0] if len(adc) == 1 else adc
+    except RadarSNNError as err:
+        raise type(err)(f"input for port {port!r}: {err}", node=err.node) from None
 
 
 def read_npy(path: str, what: str):
@@ -49,7 +137,8 @@ def read_npy(path: str, what: str):
     ------
     RadarSNNError
         Missing, empty, truncated or damaged files, not a regular file, object arrays,
-        a declared size over :data:`MAX_NPY_BYTES`, ``.npz`` archives.
+        a declared size over :data:`MAX_NPY_BYTES`, ``.npz`` archives (read those by
+        :func:`read_input` under a ``.npz`` name).
     """
     import os
     import stat
@@ -65,8 +154,8 @@ def read_npy(path: str, what: str):
             if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):  # /dev/zero, a FIFO, a tty
                 raise RadarSNNError(f"cannot read {what}: not a regular file")
             if f.read(4) == b"PK\x03\x04":
-                raise RadarSNNError(f"cannot read {what}: it is a .npz archive; give one array "
-                                    "per .npy file (np.save)")
+                raise RadarSNNError(f"cannot read {what}: it is a .npz archive; name it "
+                                    "X.npz and give it as X.npz or X.npz:KEY")
             f.seek(0)
             version = fmt.read_magic(f)
             shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
@@ -93,3 +182,13 @@ def _remaining(f) -> int:
     end = f.seek(0, 2)
     f.seek(here)
     return end - here
+
+
+def bin_layout_argument(p: argparse.ArgumentParser) -> None:
+    """Add ``--bin-layout`` (the layout of TI raw ``.bin`` inputs) to a sub-command's parser."""
+    p.add_argument("--bin-layout", metavar="LAYOUT",
+                   help="layout of TI raw ADC .bin inputs (DCA1000 captures), e.g. "
+                        "samples=256,chirps=128,rx=4,tx=2 — keys: samples (per chirp), chirps "
+                        "(per TX: the loops), rx, tx (default 1), complex or real (default "
+                        "complex), device (xwr16xx, the default, or xwr14xx), bits (default "
+                        "16); see docs/cli.md")

@@ -1,0 +1,146 @@
+"""Command-line inputs (``-i``, ``-c``) and ``radarsnn validate`` over several files (issue 19 #7).
+
+Exit statuses are only checked as zero / non-zero: the policy (2 usage, 1 runtime) is
+documented in docs/cli.md and tested where it is set.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from compiler.cli import main
+from compiler.cli.arrays import load_arrays
+from ir.errors import RadarSNNError
+
+CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
+BAD_CHAIN = ("name: x\nnodes:\n  - {id: a, op: input, shape: {range: 8}}\n"
+             "  - {id: w, op: window, input: a, axis: doppler, kind: hann}\n"
+             "  - {id: o, op: output, input: w}\n")
+
+
+def _artifact(folder: Path, shape: dict[str, int]) -> Path:
+    """A one-neuron network that spikes when the inputs sum to 2 (port ``x``, output ``y``)."""
+    from backends import save
+    from compiler.snn import (
+        Decoder,
+        Encoder,
+        LatencyCode,
+        MatrixProjection,
+        NeuronParams,
+        Population,
+        SpikingNetwork,
+    )
+
+    size = int(np.prod(list(shape.values())))
+    net = SpikingNetwork(
+        name="tiny", n_steps=8,
+        populations=[Population(id="in", shape=shape, source=True),
+                     Population(id="out", shape={"o": 1},
+                                params=NeuronParams(v_th=2.0, reset="fire_once"))],
+        projections=[MatrixProjection(id="w", source="in", target="out",
+                                      contract=tuple(shape), produce=("o",),
+                                      weights=np.ones((size, 1)))],
+        encoders=[Encoder(port="x", population="in",
+                          code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))],
+        decoders=[Decoder(port="y", population="out", kind="spiked")])
+    save(net, folder)
+    return folder
+
+
+def _run(art: Path, *inputs: str, extra: tuple[str, ...] = ()) -> list[str]:
+    argv = ["run", str(art), "--mode", "step", "--json"]
+    for item in inputs:
+        argv += ["-i", item]
+    return argv + list(extra)
+
+
+def test_a_port_given_twice_is_refused_in_one_line(tmp_path, capsys):
+    art = _artifact(tmp_path / "art", {"i": 2})
+    np.save(tmp_path / "x.npy", np.ones(2))
+    x = str(tmp_path / "x.npy")
+    assert main(["run", str(art), "-i", f"x={x}", "-i", f"x={x}"]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: ")
+    assert "input port 'x' is given twice" in err and "give each port once" in err
+    with pytest.raises(RadarSNNError, match="given twice"):  # a bare file names the port too
+        load_arrays([x, f"x={x}"], ["x"], "artifact a")
+
+
+def test_run_outputs_read_back_as_inputs(tmp_path, capsys):
+    art = _artifact(tmp_path / "art", {"i": 2})
+    np.save(tmp_path / "x.npy", np.ones(2))
+    assert main(_run(art, str(tmp_path / "x.npy"), extra=("-o", str(tmp_path / "out")))) == 0
+    capsys.readouterr()
+    # the only array of out.npz, or by key
+    for spec in (f"x={tmp_path / 'out.npz'}", f"x={tmp_path / 'out.npz'}:y"):
+        assert load_arrays([spec], ["x"], "artifact a")["x"].tolist() == [1.0]
+    np.savez(tmp_path / "in.npz", a=np.ones(2), b=np.zeros(2))
+    assert main(_run(art, f"{tmp_path / 'in.npz'}:a")) == 0
+    assert json.loads(capsys.readouterr().out)["spike_counts"]["out"] == 1
+    assert main(_run(art, f"{tmp_path / 'in.npz'}:b")) == 0
+    assert json.loads(capsys.readouterr().out)["spike_counts"]["out"] == 0
+    assert main(["run", str(art), "-i", str(tmp_path / "in.npz")]) != 0
+    err = capsys.readouterr().err
+    assert "holds 2 arrays ('a', 'b')" in err and "FILE.npz:NAME" in err
+
+
+def test_mat_inputs_by_variable(tmp_path, capsys):
+    art = _artifact(tmp_path / "art", {"i": 2})
+    savemat(tmp_path / "in.mat", {"chirp": np.ones(2), "other": np.zeros(3)})
+    assert main(_run(art, f"x={tmp_path / 'in.mat'}:chirp")) == 0
+    assert json.loads(capsys.readouterr().out)["spike_counts"]["out"] == 1
+    assert main(["run", str(art), "-i", f"x={tmp_path / 'in.mat'}:nope"]) != 0
+    assert "has no variable 'nope'; its variables are 'chirp', 'other'" in capsys.readouterr().err
+
+
+def test_ti_bin_inputs_with_a_layout(tmp_path, capsys):
+    art = _artifact(tmp_path / "art", {"rx": 1, "chirp": 1, "sample": 2})
+    np.array([1, 1], dtype="<i2").tofile(tmp_path / "cap.bin")  # one real frame
+    layout = "samples=2,chirps=1,rx=1,real"
+    assert main(_run(art, str(tmp_path / "cap.bin"), extra=("--bin-layout", layout))) == 0
+    assert json.loads(capsys.readouterr().out)["spike_counts"]["out"] == 1
+    # two frames: a leading frame axis
+    np.array([1, 1, 0, 0], dtype="<i2").tofile(tmp_path / "two.bin")
+    frames = load_arrays([str(tmp_path / "two.bin")], ["x"], "a", bin_layout=layout)["x"]
+    assert frames.shape == (2, 1, 1, 2)
+    assert main(["run", str(art), "-i", str(tmp_path / "cap.bin")]) != 0
+    assert "is a raw TI capture: give its layout, e.g. --bin-layout" in capsys.readouterr().err
+    assert main(["run", str(art), "-i", str(tmp_path / "cap.bin"), "--bin-layout",
+                 "samples=3,chirps=1,rx=1,real"]) != 0
+    err = capsys.readouterr().err
+    assert "cap.bin holds 4 bytes, not a multiple of one frame's 6 bytes" in err
+    np.save(tmp_path / "x.npy", np.ones((1, 1, 2)))
+    assert main(["run", str(art), "-i", str(tmp_path / "x.npy"), "--bin-layout", layout]) != 0
+    assert "no input is a .bin capture" in capsys.readouterr().err
+
+
+def test_validate_checks_every_file_and_names_the_bad_ones(tmp_path, capsys):
+    good = str(CHAINS / "ti_range.yaml")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD_CHAIN)
+    missing = tmp_path / "missing.yaml"
+    argv = ["validate", good, str(bad), str(missing), good]
+    assert main(argv) != 0
+    out, err = capsys.readouterr()
+    assert out.count("is valid") == 2  # the file after the bad ones is checked too
+    lines = err.splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith(f"error: {bad}: ") and "'w'" in lines[0]
+    assert lines[1].startswith(f"error: {missing}: ")
+    assert main(["validate", good, good]) == 0
+
+
+def test_validate_json_errors_carry_the_file(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD_CHAIN)
+    good = str(CHAINS / "ti_range.yaml")
+    assert main(["validate", str(bad), good, "--json"]) != 0
+    docs = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [d["ok"] for d in docs] == [False, True]
+    assert docs[0]["file"] == str(bad) and docs[0]["node"] == "w"
+    assert docs[0]["type"] == "IRError" and "doppler" in docs[0]["error"]
