@@ -24,6 +24,7 @@ from pathlib import Path
 from compiler.demo.figures import rd_maps, spike_times
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
+from radar.config import preset
 
 __all__ = ["DemoReport", "SceneReport", "TargetRow", "detection_peaks", "run_demo", "score_peaks"]
 
@@ -152,7 +153,7 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
         report.scenes.append(scene)
         if out is None:
             continue
-        files = [rd_maps(out / f"rd_{name}.png", name, arrays)]
+        files = [rd_maps(out / f"rd_{name}.png", name, arrays, preset(name))]
         if arrays.first_spikes:
             files.append(spike_times(out / f"spikes_{name}.png", name, arrays.first_spikes))
         if arrays.report is not None:

@@ -238,12 +238,15 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
         report.resources = _resources(program_report)
         arrays.spiking_db, arrays.spiking_mask = _db(s_power), s_mask
         arrays.report = program_report
-        first = {}
-        for sim in result.simulations:
-            for pid, steps in sim.first_spike_steps.items():
-                if len(first) < 4 and steps[0].size >= 16 and (steps[0] >= 0).any():
-                    first[pid] = steps[0].reshape(-1)
-        arrays.first_spikes = first
+        # every population, in pipeline order: by its node's place in the graph, then in
+        # its network's order (in -> out); the figure shows the first few
+        steps_of = {pid: s for sim in result.simulations
+                    for pid, s in sim.first_spike_steps.items()}
+        topo = {nid: k for k, nid in enumerate(program.graph.topological_order())}
+        pops = sorted((p for net in program.networks for p in net.populations
+                       if p.id in steps_of),
+                      key=lambda p: topo.get(p.origin.get("node"), len(topo)))
+        arrays.first_spikes = {p.id: steps_of[p.id][0].reshape(-1) for p in pops}
     report.targets = [
         TargetRow(range_m=float(t.range_m), velocity_mps=float(t.velocity_mps),
                   rcs_dbsm=float(t.rcs_dbsm), range_bin=int(t.range_bin),

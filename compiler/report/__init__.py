@@ -109,12 +109,15 @@ def build_report(program, *, sim_results: Sequence | None = None,
     if placement is not None:
         stage_of = {(k, p.id): p.origin.get("node", p.id)
                     for k, n in enumerate(networks) for p in n.populations}
-        first = {}
+        on_core: dict[int, list[str]] = {}  # every stage placed on a core, in placement order
         for (k, pid, _), c in zip(placement.items, placement.core, strict=True):
-            first.setdefault(int(c), stage_of[(k, pid)])
+            placed = on_core.setdefault(int(c), [])
+            if stage_of[(k, pid)] not in placed:
+                placed.append(stage_of[(k, pid)])
         for c in range(placement.n_cores):
             cores.append({"core": c, "chip": int(c // profile.cores_per_chip)
-                          if profile.cores_per_chip else 0, "stage": first.get(c, "?"),
+                          if profile.cores_per_chip else 0,
+                          "stage": on_core.get(c, ["?"])[0], "stages": on_core.get(c, ["?"]),
                           **dict(zip(BUDGETS, placement.usage[c].tolist(), strict=True)),
                           "utilisation": placement.utilisation[c].round(6).tolist()})
     totals = {

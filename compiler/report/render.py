@@ -12,7 +12,8 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
     cfar_ops[]    node, n_train, algorithm, add, cmp, total[, n_steps]
     latency       networks[] (network, time_steps, runs, latency_steps, step_s, latency_s);
                   total_steps, total_s, frame_period_s, fits, max_step_s, step_note
-    cores[]       core, chip, neurons, input_axons, output_axons, synapse_bits, utilisation
+    cores[]       core, chip, stage (the first placed), stages (all, in placement order),
+                  neurons, input_axons, output_axons, synapse_bits, utilisation
     traffic       host_input, inter_core, inter_chip, buffered (messages per frame), basis
     totals        inputs, neurons, synapses, synapses_stored, cores, chips, synapse_memory_bits
 """
@@ -113,32 +114,16 @@ class Report:
         return "\n".join(lines) + "\n"
 
     def save_core_map(self, path: str | Path) -> Path:
-        """Draw the cores (rows of chips) coloured by stage, shaded by utilisation, as a PNG."""
-        import matplotlib
+        """Draw the cores coloured by stage, filled to their utilisation, as a PNG.
 
-        matplotlib.use("Agg")
+        See :mod:`compiler.report.core_map` (every stage on a core is drawn, a shared
+        core split between its stages; the legend's colours are the patches').
+        """
         import matplotlib.pyplot as plt
 
-        cores = self.data["cores"]
-        per_row = max(1, min(32, self.data.get("cores_per_chip") or 32))
-        n_rows = max(1, -(-len(cores) // per_row))
-        stages = sorted({c["stage"] for c in cores})
-        cmap = plt.get_cmap("tab20")
-        fig, ax = plt.subplots(figsize=(max(4, per_row * 0.3), max(2, n_rows * 0.3 + 1)))
-        for c in cores:
-            i = c["core"]
-            colour = cmap(stages.index(c["stage"]) % 20)
-            ax.add_patch(plt.Rectangle((i % per_row, -(i // per_row)), 0.9, 0.9, color=colour,
-                                       alpha=0.25 + 0.75 * min(1.0, max(c["utilisation"]))))
-        for k, s in enumerate(stages):
-            ax.plot([], [], "s", color=cmap(k % 20), label=s)
-        ax.set_xlim(0, per_row)
-        ax.set_ylim(-n_rows + 1, 1)
-        ax.set_aspect("equal")
-        ax.axis("off")
-        ax.set_title(f"{self.data['chain']} on {self.data['target']}: {len(cores)} cores")
-        if stages:
-            ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
+        from compiler.report.core_map import core_map_figure
+
+        fig = core_map_figure(self.data)
         path = Path(path)
         fig.savefig(path, dpi=100, bbox_inches="tight")
         plt.close(fig)

@@ -6,7 +6,9 @@
 * ``weight_bits`` — a metric vs weight bits, one line per variant;
 * ``pareto`` — a metric vs a cost column over all points, the Pareto-optimal
   points (no other point is at least as cheap and at least as accurate, one of
-  the two strictly) joined by a line.
+  the two strictly) joined by a line.  When the figure's cost is the same at
+  every point (e.g. ``synapses`` over a ``time_steps`` grid) it is plotted
+  against the first cost that varies (:func:`pick_cost`), and says so.
 
 Examples
 --------
@@ -24,7 +26,7 @@ import numpy as np
 from compiler.sweep.spec import FigureSpec
 from ir.errors import CompileError
 
-__all__ = ["pareto_front", "draw_figures", "MAIN_FIELD"]
+__all__ = ["pareto_front", "pick_cost", "draw_figures", "MAIN_FIELD"]
 
 #: The field a metric is plotted by when a figure names only the metric key.
 MAIN_FIELD = {"cfar": "sensitivity", "detection": "pd", "sft_rmse": "rmse",
@@ -122,19 +124,67 @@ def _lines(plt, rows, fig, names, default_name, x_default):
     return f
 
 
+#: Cost columns tried, in this order, when the figure's cost is the same at every point.
+COST_FALLBACK = ("synapses", "neurons", "cores", "steps", "synaptic_events_per_frame",
+                 "spikes_per_frame")
+#: Axis labels of the cost columns.
+COST_LABELS = {"neurons": "neurons", "inputs": "input neurons",
+               "synapses": "synapses (instances wired)", "synapses_stored": "synapses stored",
+               "steps": "time steps per frame", "cores": "cores",
+               "spikes_per_frame": "spikes per frame",
+               "synaptic_events_per_frame": "synaptic events per frame"}
+
+
+def _cost_values(rows: list[dict], key: str, cost: str) -> tuple[list[dict], list[float]]:
+    ok = [r for r in rows if key in r["metrics"] and r["cost"].get(cost) is not None]
+    return ok, [float(r["cost"][cost]) for r in ok]
+
+
+def pick_cost(rows: list[dict], key: str, cost: str) -> tuple[str, str | None]:
+    """The cost column to plot and, when it is not ``cost``, why.
+
+    ``cost`` when it varies over the points with metric ``key``; else the first
+    of :data:`COST_FALLBACK` that does (the note names the constant one); else
+    ``cost`` with a note that every point costs the same.
+
+    Examples
+    --------
+    >>> rows = [{"metrics": {"m": {}}, "cost": {"synapses": 5, "steps": s}} for s in (16, 64)]
+    >>> pick_cost(rows, "m", "synapses")
+    ('steps', 'cost.synapses is 5 at every point: plotted against cost.steps')
+    >>> pick_cost(rows[:1], "m", "synapses")[1]
+    'cost.synapses is 5 at every point, and so is every other cost: no trade-off to show'
+    """
+    ok, values = _cost_values(rows, key, cost)
+    if len(set(values)) > 1:
+        return cost, None
+    if values:
+        value = f"{int(values[0]):,}" if values[0].is_integer() else f"{values[0]:g}"
+        same = f"cost.{cost} is {value} at every point"
+    else:
+        same = f"no point has cost.{cost}"
+    for other in COST_FALLBACK:
+        if other != cost and len(set(_cost_values(rows, key, other)[1])) > 1:
+            return other, f"{same}: plotted against cost.{other}"
+    return cost, f"{same}, and so is every other cost: no trade-off to show"
+
+
 def _pareto(plt, rows, fig, names):
     key, fld = _resolve(fig, names, None)
-    cost = fig.cost or "synapses"
-    ok = [r for r in rows if key in r["metrics"] and r["cost"].get(cost) is not None]
-    c = [r["cost"][cost] for r in ok]
+    cost, note = pick_cost(rows, key, fig.cost or "synapses")
+    ok, c = _cost_values(rows, key, cost)
     v = [r["metrics"][key][fld] for r in ok]
     front = pareto_front(c, v, maximize=fld not in LOWER_IS_BETTER)
-    f, ax = plt.subplots(figsize=(5.5, 3.8))
+    f, ax = plt.subplots(figsize=(5.5, 3.8 + (0.3 if note else 0.0)))
     ax.scatter(c, v, color="0.6", label="points")
     ax.plot([c[i] for i in front], [v[i] for i in front], "o-", color="C3", label="Pareto front")
-    ax.set(xlabel=f"cost.{cost}", ylabel=f"{key}.{fld}")
+    if len(set(c)) > 1 and max(c) / max(min(c), 1e-300) >= 20:
+        ax.set_xscale("log")
+    ax.set(xlabel=f"{COST_LABELS.get(cost, cost)} (cost.{cost})", ylabel=f"{key}.{fld}")
+    if note:
+        ax.set_title(note, fontsize=8, color="C3" if "no trade-off" in note else "0.2")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize="small")
     return f
 
 
