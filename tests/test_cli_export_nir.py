@@ -1,0 +1,103 @@
+"""``radarsnn export-nir`` (compiler.cli.export_nir): chain files, compiled folders, network
+artifacts, the export report beside the file, one-line errors, and the missing extra."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+
+import numpy as np
+import pytest
+
+from compiler.cli import build_parser, main
+
+CHAIN = """name: tiny-range-cfar
+nodes:
+  - {id: x, op: input, shape: {sample: 32}}
+  - {id: rng, op: dft, input: x, axis: sample, out_axis: range, keep: positive}
+  - {id: mag, op: magnitude, input: rng, kind: square}
+  - {id: det, op: cfar, input: mag, kind: os, guard: 1, train: 2, k: 3, alpha: 4.0}
+  - {id: out, op: output, input: det}
+"""
+
+
+@pytest.fixture
+def chain(tmp_path):
+    """A small range-CFAR chain file and four calibration frames."""
+    path = tmp_path / "tiny.yaml"
+    path.write_text(CHAIN)
+    np.save(tmp_path / "frames.npy", np.random.default_rng(0).standard_normal((4, 32)))
+    return path, tmp_path / "frames.npy"
+
+
+def test_the_command_is_registered():
+    parser = build_parser()
+    args = parser.parse_args(["export-nir", "c.yaml", "-o", "c.nir"])
+    assert args.command == "export-nir" and args.target is None and args.stage is None
+
+
+def test_a_chain_is_compiled_and_written_with_its_report(chain, tmp_path, capsys):
+    nir = pytest.importorskip("nir")
+    path, frames = chain
+    out = tmp_path / "nested" / "tiny.nir"
+    assert main(["export-nir", str(path), "-c", f"x={frames}", "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["nir"] == str(out) and summary["calibration"] == "calibrated on the given inputs"
+    graph = nir.read(out)
+    assert len(graph.nodes) == summary["nodes"] and summary["nodes"] > 0
+    report = json.loads((tmp_path / "nested" / "tiny.report.json").read_text())
+    assert report["path"] == str(out) and report["counts"] == summary["counts"]
+    assert {"rng", "det"} <= {n.split(".")[1] for n in graph.nodes}  # n<k>.<IR node>.…
+
+
+def test_a_compiled_folder_is_exported_by_stage(chain, tmp_path, capsys):
+    nir = pytest.importorskip("nir")
+    path, frames = chain
+    assert main(["compile", str(path), "-c", str(frames), "-o", str(tmp_path / "art"), "-q"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "cfar.nir"
+    assert main(["export-nir", str(tmp_path / "art"), "--stage", "det", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith(f"wrote {out} (") and "calibrated on the given inputs" in text
+    assert "NIR export:" in text
+    assert all(name.startswith("det.") for name in nir.read(out).nodes)
+
+
+def test_a_network_artifact_is_exported(tmp_path, capsys):
+    nir = pytest.importorskip("nir")
+    from test_nir_export import _zoo
+
+    from backends import save
+    from backends.nir.export import export_network
+
+    save(_zoo(), tmp_path / "zoo")
+    out = tmp_path / "zoo.nir"
+    assert main(["export-nir", str(tmp_path / "zoo"), "-o", str(out), "-q"]) == 0
+    assert capsys.readouterr().out == ""
+    assert sorted(nir.read(out).nodes) == sorted(export_network(_zoo())[0].nodes)
+
+
+@pytest.mark.parametrize("extra, expected", [
+    (["-c", "x.npy"], r"already compiled: -c/--calibration apply to a chain file only"),
+    (["--target", "spinnaker2"], r"compiled for loihi2, not spinnaker2: export the chain file"),
+    (["--stage", "nope"], r"no spiking network to export"),
+])
+def test_errors_are_one_line(chain, tmp_path, capsys, extra, expected):
+    pytest.importorskip("nir")
+    path, frames = chain
+    assert main(["compile", str(path), "-c", str(frames), "-o", str(tmp_path / "art"), "-q"]) == 0
+    capsys.readouterr()
+    status = main(["export-nir", str(tmp_path / "art"), *extra, "-o", str(tmp_path / "o.nir")])
+    err = capsys.readouterr().err
+    assert status != 0 and len(err.strip().splitlines()) == 1
+    assert err.startswith("error: ") and re.search(expected, err)
+    assert not (tmp_path / "o.nir").exists()
+
+
+def test_without_nir_the_error_names_the_extra(chain, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "nir", None)  # `import nir` raises ImportError
+    path, _ = chain
+    assert main(["export-nir", str(path), "-o", str(tmp_path / "t.nir")]) != 0
+    err = capsys.readouterr().err
+    assert err == "error: radarsnn export-nir needs the nir package: pip install 'radarsnn[nir]'\n"

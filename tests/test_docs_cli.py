@@ -1,0 +1,234 @@
+"""Every documented command session of README.md and docs/*.md runs, as the python blocks do.
+
+A *session block* is a fenced ```bash, ```sh, ```shell or ```console block with a
+``radarsnn`` command in it (in a ```console block only the ``$ `` lines run).  The
+blocks of one page run in order, as bash scripts (``set -e -o pipefail``), in one
+temporary folder holding a copy of ``examples/`` — a session may span blocks: files
+and the working directory (a ``cd``) carry over — with the ``bin`` folder of this
+interpreter's virtual environment (its ``radarsnn`` and ``python``) first on
+``PATH`` and ``RADARSNN_DATA`` pointing at the real captures.  Each must exit 0.
+
+Markers on the line just before the opening fence:
+
+* ``<!-- no-test: REASON -->`` — the block is not run (a pip install, a long
+  benchmark, a remote scheduler); the test is reported as skipped with REASON;
+* ``<!-- requires: MODULE[, MODULE] -->`` — the block needs an optional extra; it
+  is skipped (naming the module) where one is not importable.
+
+A block that reads the real captures (``radar.loaders``) skips without them,
+except under CI, where they must be there (``tests/conftest.py``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+SHELLS = ("bash", "sh", "shell", "console")
+FENCE = re.compile(r"^```(\S*)\s*$")
+MARKER = re.compile(r"^<!--\s*(no-test|requires)\b:?\s*(.*?)\s*-->$")
+COMMAND = re.compile(r"(?:^|[\s/;&|(])radarsnn(?:\s|$)", re.M)
+BIN = Path(sys.executable).parent  # the virtual environment's bin (radarsnn, python)
+TIMEOUT_S = 600
+
+#: Run around every block: stop at the first failing command and name it; keep the cwd.
+WRAPPER = """set -eo pipefail
+trap 'echo "documented command failed (exit status $?): $BASH_COMMAND" >&2' ERR
+cd "$1"
+{code}
+pwd > "$2"
+"""
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced block of a page: where, its language, its code and its marker."""
+
+    page: str
+    line: int  # of the opening fence
+    lang: str
+    code: str
+    no_test: str | None = None  # the reason, when marked no-test
+    requires: tuple[str, ...] = ()
+
+    @property
+    def where(self) -> str:
+        return f"{self.page}:{self.line}"
+
+    @property
+    def is_session(self) -> bool:
+        return self.lang in SHELLS and COMMAND.search(self.script()) is not None
+
+    def script(self) -> str:
+        """The commands: the code, or of a console block its ``$ `` lines (and continuations)."""
+        if self.lang != "console":
+            return self.code
+        out, more = [], False
+        for line in self.code.splitlines():
+            if more or line.startswith("$ "):
+                out.append(line[2:] if not more else line)
+                more = line.rstrip().endswith("\\")
+        return "\n".join(out) + "\n"
+
+
+def fenced_blocks(text: str, page: str = "page.md") -> list[Block]:
+    """Every fenced block of a Markdown text, with the marker of the line before it.
+
+    Examples
+    --------
+    >>> md = ("<!-- no-test: slow -->\\n```bash\\nradarsnn bench\\n```\\n"
+    ...       "```console\\n$ radarsnn validate x.yaml\\nx.yaml: ok\\n```\\n")
+    >>> [(b.line, b.lang, b.no_test, b.is_session) for b in fenced_blocks(md)]
+    [(2, 'bash', 'slow', True), (5, 'console', None, True)]
+    >>> fenced_blocks(md)[1].script()
+    'radarsnn validate x.yaml\\n'
+    """
+    lines, blocks, i = text.splitlines(), [], 0
+    while i < len(lines):
+        match = FENCE.match(lines[i].strip())
+        if match is None:
+            i += 1
+            continue
+        j = i + 1
+        while j < len(lines) and lines[j].strip() != "```":
+            j += 1
+        marker = MARKER.match(lines[i - 1].strip()) if i > 0 else None
+        kind, arg = (marker.group(1), marker.group(2)) if marker else (None, "")
+        blocks.append(Block(page=page, line=i + 1, lang=match.group(1),
+                            code="\n".join(lines[i + 1:j]) + "\n",
+                            no_test=arg if kind == "no-test" else None,
+                            requires=tuple(m.strip() for m in arg.split(",") if m.strip())
+                            if kind == "requires" else ()))
+        i = j + 1
+    return blocks
+
+
+def sessions(page: Path) -> list[Block]:
+    """The session blocks of a page, in order."""
+    return [b for b in fenced_blocks(page.read_text(encoding="utf-8"), page.name) if b.is_session]
+
+
+BLOCKS = [b for page in PAGES for b in sessions(page)]
+
+
+@dataclass
+class Workspace:
+    """One page's temporary folder, its working directory and the blocks run in it."""
+
+    cwd: Path
+    state: Path
+    ran: dict[int, str | None] = field(default_factory=dict)  # line -> None ok, or the failure
+
+
+@pytest.fixture(scope="module")
+def workspaces(tmp_path_factory: pytest.TempPathFactory):
+    made: dict[str, Workspace] = {}
+
+    def get(page: str) -> Workspace:
+        if page not in made:
+            base = tmp_path_factory.mktemp(Path(page).stem)
+            shutil.copytree(ROOT / "examples", base / "work" / "examples")
+            made[page] = Workspace(cwd=base / "work", state=base / "cwd")
+        return made[page]
+
+    return get
+
+
+def _environment() -> dict[str, str]:
+    from radar.loaders import default_data_dir  # $RADARSNN_DATA or ../shared/data
+
+    env = dict(os.environ)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
+    env["RADARSNN_DATA"] = str(default_data_dir().resolve())
+    env["MPLBACKEND"] = "Agg"
+    return env
+
+
+def _why_not(block: Block, request: pytest.FixtureRequest) -> str | None:
+    """Why the block cannot run here (None: it can); may skip through ``shared_data``."""
+    if block.no_test is not None:
+        return block.no_test
+    missing = [m for m in block.requires if importlib.util.find_spec(m) is None]
+    if missing:
+        return f"needs the optional {', '.join(missing)} package (an extra of pyproject.toml)"
+    if "radar.loaders" in block.code:
+        request.getfixturevalue("shared_data")  # skips without the captures (fails under CI)
+    return None
+
+
+def _run(block: Block, space: Workspace) -> str | None:
+    """Run one block in the page's workspace; None, or what failed."""
+    cwd = Path(space.state.read_text().strip()) if space.state.is_file() else space.cwd
+    try:
+        done = subprocess.run(
+            ["bash", "-c", WRAPPER.format(code=block.script()), block.where, str(cwd),
+             str(space.state)], env=_environment(), capture_output=True, text=True,
+            timeout=TIMEOUT_S, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return f"{block.where}: still running after {TIMEOUT_S} s"
+    if done.returncode == 0:
+        return None
+    return (f"{block.where}: exit status {done.returncode}\n--- stderr (end) ---\n"
+            f"{done.stderr[-3000:]}\n--- stdout (end) ---\n{done.stdout[-1500:]}")
+
+
+@pytest.mark.parametrize("block", BLOCKS, ids=[b.where for b in BLOCKS])
+def test_documented_session_runs(block: Block, workspaces, request: pytest.FixtureRequest
+                                 ) -> None:
+    if not (BIN / "radarsnn").exists():
+        message = f"no radarsnn beside {sys.executable}: pip install -e . into this venv"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    reason = _why_not(block, request)
+    if reason is not None:
+        pytest.skip(f"{block.where}: {reason}")
+    space = workspaces(block.page)
+    for earlier in BLOCKS:  # a session spans blocks: run the page's earlier ones first
+        if earlier.page != block.page or earlier.line >= block.line:
+            continue
+        if earlier.line not in space.ran and _why_not(earlier, request) is None:
+            space.ran[earlier.line] = _run(earlier, space)
+        if space.ran.get(earlier.line) is not None:
+            pytest.fail(f"an earlier block of the session failed: {space.ran[earlier.line]}")
+    if block.line not in space.ran:
+        space.ran[block.line] = _run(block, space)
+    assert space.ran[block.line] is None, space.ran[block.line]
+
+
+def test_the_parser_reads_markers_and_console_prompts() -> None:
+    md = ("text\n<!-- requires: nir, h5py -->\n```sh\nradarsnn export-nir a -o b.nir\n```\n"
+          "```\nradarsnn validate x.yaml\n```\n```console\n$ radarsnn compile c.yaml \\\n"
+          "    -o out\ncompiled\n$ ls out\n```\n```bash\npip install radarsnn[nir]\n```\n")
+    blocks = fenced_blocks(md)
+    assert [(b.lang, b.requires, b.is_session) for b in blocks] == [
+        ("sh", ("nir", "h5py"), True), ("", (), False), ("console", (), True),
+        ("bash", (), False)]
+    assert blocks[2].script() == "radarsnn compile c.yaml \\\n    -o out\nls out\n"
+
+
+def test_every_command_block_is_a_tagged_shell_block() -> None:
+    """A command block left untagged (or tagged text) would silently escape the tests."""
+    untagged = [b.where for page in PAGES
+                for b in fenced_blocks(page.read_text(encoding="utf-8"), page.name)
+                if b.lang not in (*SHELLS, "python")
+                and re.search(r"^\s*(?:\$\s+)?radarsnn\s", b.code, re.M)]
+    assert not untagged, f"tag these command blocks ```bash (or ```console): {untagged}"
+
+
+def test_no_test_markers_name_their_reason() -> None:
+    marked = [b for b in BLOCKS if b.no_test is not None]
+    assert all(b.no_test for b in marked), [b.where for b in marked if not b.no_test]
+    assert len(marked) <= len(BLOCKS) // 2, [b.where for b in marked]
+    assert {"cli.md", "getting-started.md", "howto-chain.md"} <= {
+        b.page for b in BLOCKS if b.no_test is None}
