@@ -34,6 +34,7 @@ Examples
 from __future__ import annotations
 
 import json
+import logging
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -49,6 +50,8 @@ from ir.parsing import load_json
 
 __all__ = ["PROGRAM_FILE", "PROGRAM_FORMAT", "PROGRAM_VERSION", "is_program", "load_program",
            "read_program_manifest", "save_program"]
+
+log = logging.getLogger(__name__)
 
 #: The program manifest's file name.
 PROGRAM_FILE = "program.json"
@@ -121,6 +124,8 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
                           owned=ARTIFACT_ENTRIES)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
+    log.info("saved program %r (%d segment(s)) to %s", program.graph.name,
+             len(program.segments), folder)
     return folder
 
 

@@ -28,9 +28,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from ir.errors import IRError, RadarSNNError
+from ir.frames import frame, n_frames, stack_frames
 from ir.graph import Graph
 from ir.implementations import EVAL_REGISTRY, EvalRegistry, Implementation
-from ir.limits import MAX_VALUE_BYTES, check_value_sizes
+from ir.limits import MAX_VALUE_BYTES, check_limit, check_value_sizes
 from ir.ops import (
     Op,
 )
@@ -55,7 +56,10 @@ def evaluate(
     inputs : mapping of str to array_like
         One array per graph input node (``graph.input_ids()``), shaped as its
         declared axes: complex for complex inputs, real otherwise, boolean for
-        ``mask`` inputs, non-negative for ``power`` inputs, all finite.
+        ``mask`` inputs, non-negative for ``power`` inputs, all finite.  With one
+        extra leading axis of frames on every input (``(F, *declared)``), each frame is
+        evaluated as if given alone and every value gets that leading axis
+        (:mod:`ir.frames`).
     registry : mapping of op class to implementation, optional
         Implementations that extend or override :data:`EVAL_REGISTRY`.
     max_memory_bytes : int or None
@@ -101,6 +105,14 @@ which are not graph inputs (inputs: ['x'])
     graph.verify()
     types = graph.infer_types()
     _check_input_names(graph, inputs)
+    count = n_frames(types, inputs, f"graph {graph.name!r}")
+    if count is not None:  # the stack holds every frame's values: each frame gets its share
+        limit = check_limit("max_memory_bytes", max_memory_bytes, "bytes",
+                            where=f"graph {graph.name!r}", error=IRError)
+        share = None if limit is None else max(1, int(limit) // count)
+        check_value_sizes(graph, types, types, max_memory_bytes=share)
+        return stack_frames([evaluate(graph, frame(inputs, i), registry=registry,
+                                      max_memory_bytes=share) for i in range(count)])
     check_value_sizes(graph, types, types, max_memory_bytes=max_memory_bytes)
     values: dict[str, np.ndarray] = {}
     for node_id, out_type in types.items():

@@ -24,6 +24,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from backends import load, load_program, save, save_program
 from backends.reference import run_program, simulate
+from backends.reference.accuracy import check_accuracy
 from compiler.compile import compile_graph
 from compiler.program import CompiledProgram
 from ir import Graph, evaluate
@@ -38,6 +39,6 @@ except PackageNotFoundError:  # run from a source tree that was never installed
 
 __all__ = [
     "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
-    "compile_graph", "evaluate", "load", "load_program", "run_program", "save", "save_program",
+    "check_accuracy", "compile_graph", "evaluate", "load", "load_program", "run_program", "save", "save_program",
     "simulate", *_errors.__all__,
 ]

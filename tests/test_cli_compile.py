@@ -61,7 +61,7 @@ def test_report_reads_a_compiled_artifact(compiled, capsys):
     assert main(["report", str(compiled), "--target", "loihi2", "--format", "json"]) == 0
     capsys.readouterr()
     # another target than the artifact's: refused, naming both and the fix (was ignored)
-    assert main(["report", str(compiled), "--target", "spinnaker2"]) == 2
+    assert main(["report", str(compiled), "--target", "spinnaker2"]) == 1
     err = capsys.readouterr().err
     assert "compiled for loihi2" in err and "not spinnaker2" in err and "CHAIN.yaml" in err
 
@@ -102,16 +102,20 @@ def test_save_dispatches_on_programs(tmp_path):
     assert back.target is None and back.graph == g and back.records == {}
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["compile", "nope.yaml", "-o", "x"], "nope.yaml"),
-    (["run", "missing_dir", "-i", "x.npy"], "missing_dir"),
-    (["compile", str(TI), "-o", "x", "--target", "no-such-chip"], "no-such-chip"),
-    (["compile", str(TI), "-o", "x", "--option", "bogus=1"], "bogus"),
-    (["compile", str(TI), "-o", "x", "--motif", "dft"], "NODE_OR_OP=MOTIF"),
+@pytest.mark.parametrize("argv, needle, status", [
+    (["compile", "nope.yaml", "-o", "x"], "nope.yaml", 1),
+    (["run", "missing_dir", "-i", "x.npy"], "missing_dir", 1),
+    (["compile", str(TI), "-o", "x", "--target", "no-such-chip"], "no-such-chip", 1),
+    (["compile", str(TI), "-o", "x", "--option", "bogus=1"], "bogus", 1),
+    (["compile", str(TI), "-o", "x", "--motif", "dft"], "NODE_OR_OP=MOTIF", 2),
+    (["compile", str(TI)], "--output/-o", 2),
+    (["no-such-command"], "invalid choice", 2),
 ])
-def test_errors_are_one_line_without_traceback(argv, needle, capsys, tmp_path, monkeypatch):
+def test_errors_are_one_line_without_traceback(argv, needle, status, capsys, tmp_path,
+                                               monkeypatch):
+    """Exit status 2 for a bad command line, 1 for a runtime (typed) error; one line each."""
     monkeypatch.chdir(tmp_path)
-    assert main(argv) == 2
+    assert main(argv) == status
     err = capsys.readouterr().err
     assert err.startswith("error: ") and needle in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
@@ -119,7 +123,7 @@ def test_errors_are_one_line_without_traceback(argv, needle, capsys, tmp_path, m
 
 def test_json_errors_are_json(capsys, tmp_path):
     assert main(["compile", str(tmp_path / "nope.yaml"), "-o", str(tmp_path / "x"),
-                 "--json"]) == 2
+                 "--json"]) == 1
     doc = json.loads(capsys.readouterr().out)
     assert "nope.yaml" in doc["error"] and doc["type"]
 
@@ -146,7 +150,7 @@ def test_option_values_are_parsed_within_the_yaml_bounds(capsys, tmp_path):
         f"&{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]"
         for p, c in zip("abcdefgh", "bcdefghi", strict=True)) + "]"
     assert main(["compile", str(TI), "-o", str(tmp_path / "x"), "--option",
-                 f"fft_radices={bomb}"]) == 2
+                 f"fft_radices={bomb}"]) == 1
     err = capsys.readouterr().err
     assert "option 'fft_radices': line 1: the document has more than 524288 YAML nodes" in err
     assert len(err) < 1000
@@ -206,3 +210,20 @@ def test_a_network_path_the_file_system_refuses_is_an_artifact_error(compiled, t
     path.write_bytes(render_json(seal(manifest)))
     with pytest.raises(ArtifactError, match=r"program\.json: network path '.*' cannot be used"):
         load(copy)
+
+
+def test_verbose_logs_each_pass_and_quiet_by_default(capsys, tmp_path):
+    assert main(["compile", str(TI), "-o", str(tmp_path / "a"), "--target", "unbounded",
+                 "-q"]) == 0
+    assert "compiler.passes.base: pass" not in capsys.readouterr().err
+    assert main(["compile", str(TI), "-o", str(tmp_path / "b"), "--target", "unbounded",
+                 "-q", "-v"]) == 0
+    err = capsys.readouterr().err
+    for name in ("verify", "calibrate", "lower", "place", "report"):
+        assert f"compiler.passes.base: pass {name}: " in err
+    assert "compiler.passes.calibrate: policy static, ranges from" in err
+    assert main(["-vv", "compile", str(TI), "-o", str(tmp_path / "c"), "--target", "unbounded",
+                 "-q"]) == 0
+    assert "compiler.passes.lower: node 'rng' -> motif" in capsys.readouterr().err
+    main(["schema"])  # back to warnings only for the tests that follow
+    capsys.readouterr()

@@ -21,7 +21,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,6 +35,7 @@ from backends.reference.units import apply_units, normalize_inputs, normalized_i
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
 from ir.evaluate import check_input, eval_registry, evaluate_node
+from ir.frames import frame, n_frames, stack_frames
 from ir.limits import check_limit, check_value_sizes
 from ir.model import short_repr
 
@@ -196,7 +197,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 mode: str = "auto", arithmetic: str = "float64", record_spikes: bool = False,
                 plans: Sequence[SimPlan] | None = None, out_of_range: str = DEFAULT_POLICY,
                 max_memory_bytes: int | None = MAX_MEMORY_BYTES,
-                max_time_s: float | None = MAX_TIME_S) -> ProgramResult:
+                max_time_s: float | None = MAX_TIME_S,
+                progress: Callable[[int, int], None] | None = None) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
     Parameters
@@ -204,7 +206,11 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     program : CompiledProgram
         What :func:`compiler.compile.compile_graph` returned.
     inputs : mapping of str to ndarray
-        One array per input node id, of the node's declared shape.
+        One array per input node id, of the node's declared shape — or every one with
+        the same extra leading axis of frames (``(F, *declared)``, :mod:`ir.frames`):
+        the frames are run one after the other (plans built once) and every value,
+        output and segment result gets the frames axis; equal, bit for bit, to running
+        the frames one by one.
     mode, arithmetic : str
         Passed to :func:`backends.reference.simulate` for every spiking segment.
     record_spikes : bool
@@ -221,7 +227,11 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         they are always clipped; every clipped value is counted in
         :attr:`ProgramResult.clipped`.
     max_memory_bytes, max_time_s : int, float or None
-        Limits on each spiking segment's estimate (see :func:`~backends.reference.simulate`).
+        Limits on each spiking segment's estimate (see :func:`~backends.reference.simulate`);
+        with a frames axis the memory limit is shared by the frames, the time limit
+        holds per frame.
+    progress : callable, optional
+        ``progress(done, total)`` after each frame of a framed run (e.g. a tqdm update).
 
     Raises
     ------
@@ -269,6 +279,12 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         raise SimulationError(f"program {graph.name!r}: inputs {sorted(inputs)} do not match the "
                               f"graph's input nodes {sorted(expected)} (missing "
                               f"{sorted(missing)}, unknown {sorted(extra)})")
+    count = n_frames(types, inputs, where)
+    if count is not None:
+        return _run_frames(program, inputs, count, progress, mode=mode, arithmetic=arithmetic,
+                           record_spikes=record_spikes, out_of_range=out_of_range,
+                           plans=list(plans) if plans is not None else None,
+                           max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
     # every node's value is kept: refuse what cannot fit before the first is allocated
     check_value_sizes(graph, types, types, max_memory_bytes=check_limit(
         "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
@@ -307,3 +323,25 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     outputs = {k: values[k] for k in graph.output_ids()}
     return ProgramResult(values=values, outputs=outputs, simulations=sims, normalized=left,
                          input_peaks=peaks)
+
+
+def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], count: int,
+                progress: Callable[[int, int], None] | None, *, plans: list[SimPlan] | None,
+                max_memory_bytes: int | None, arithmetic: str, **options) -> ProgramResult:
+    """:func:`run_program` frame by frame, plans built once; the results stacked."""
+    plans = plans if plans is not None else program_plans(program, arithmetic)
+    share = None if max_memory_bytes is None else max(1, int(max_memory_bytes) // count)
+    runs = []
+    for i in range(count):
+        runs.append(run_program(program, frame(inputs, i), plans=plans, arithmetic=arithmetic,
+                                max_memory_bytes=share, **options))
+        if progress is not None:
+            progress(i + 1, count)
+    first = runs[0]
+    return ProgramResult(
+        values=stack_frames([r.values for r in runs]),
+        outputs=stack_frames([r.outputs for r in runs]),
+        simulations=[SimResult.stack([r.simulations[k] for r in runs])
+                     for k in range(len(first.simulations))],
+        normalized=first.normalized, input_peaks=stack_frames([r.input_peaks for r in runs])
+        if first.input_peaks else {})

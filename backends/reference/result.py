@@ -108,3 +108,36 @@ class SimResult:
         lines += [f"  input {k}: {v} values outside the encoder's range, clipped"
                   for k, v in self.clipped.items()]
         return "\n".join(lines)
+
+    @classmethod
+    def stack(cls, results: list[SimResult]) -> SimResult:
+        """The results of single-frame runs of one network as one batch of those frames.
+
+        Outputs, first-spike steps and rasters are stacked frame after frame, counts
+        summed: what one batched :func:`~backends.reference.simulate` call returns.
+
+        Examples
+        --------
+        >>> r = SimResult(outputs={"y": np.zeros(2)}, spike_counts={"a": 3},
+        ...               synaptic_events={"w": 6}, first_spike_steps={"a": np.zeros((1, 2))},
+        ...               spikes=None, mode="step", arithmetic="float64", n_steps=8, n_frames=1)
+        >>> both = SimResult.stack([r, r])
+        >>> both.outputs["y"].shape, both.spike_counts, both.first_spike_steps["a"].shape
+        ((2, 2), {'a': 6}, (2, 2))
+        """
+        first = results[0]
+
+        def total(name: str) -> dict[str, int]:
+            keys = dict.fromkeys(k for r in results for k in getattr(r, name))
+            return {k: sum(getattr(r, name).get(k, 0) for r in results) for k in keys}
+
+        return cls(
+            outputs={k: np.stack([r.outputs[k] for r in results]) for k in first.outputs},
+            spike_counts=total("spike_counts"), synaptic_events=total("synaptic_events"),
+            first_spike_steps={k: np.concatenate([r.first_spike_steps[k] for r in results])
+                               for k in first.first_spike_steps},
+            spikes=None if first.spikes is None else {
+                k: np.concatenate([r.spikes[k] for r in results]) for k in first.spikes},
+            mode="+".join(dict.fromkeys(r.mode for r in results)), arithmetic=first.arithmetic,
+            n_steps=first.n_steps, n_frames=sum(r.n_frames for r in results),
+            clipped={k: v for k, v in total("clipped").items() if v})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
@@ -32,6 +33,8 @@ __all__ = ["simulate", "ENGINES", "RASTER_LIMIT_BYTES"]
 
 #: Default cap on recorded spike rasters (bytes).
 RASTER_LIMIT_BYTES = 256 << 20
+
+log = logging.getLogger(__name__)
 
 #: The engines by mode name.
 ENGINES: dict[str, Callable[..., Activity]] = {"step": run_step, "closed": run_closed}
@@ -186,6 +189,8 @@ def simulate(
                                   f"{need // max(1, n_frames * network.n_steps)} neurons), over "
                                   f"raster_limit_bytes={raster_limit_bytes}; simulate fewer "
                                   "frames, raise the limit, or use record_spikes=False")
+    log.debug("simulate %r: engine %s, %d frame(s) x %d step(s), %d neuron(s)", network.name,
+              run, n_frames, network.n_steps, sum(p.size for p in network.populations))
     act = ENGINES[run](plan, trains, n_frames, record_spikes)
     pops = network.population
     return SimResult(

@@ -3,14 +3,22 @@
 Sub-commands live in small modules, each with an ``add_parsers(subparsers)``
 function, collected explicitly in :data:`COMMAND_MODULES`:
 
-* :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``, ``run``;
+* :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
+* :mod:`compiler.cli.run` — ``run``; :mod:`compiler.cli.export_nir` — ``export-nir``;
 * :mod:`compiler.cli.demo` — ``demo``, ``bench``;
 * :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
   (Dask is imported only when a sweep runs).
 
-Errors from the project's hierarchy (and unreadable files) are printed as one
-line ``error: …`` on stderr with exit status 2 — as a JSON object on stdout
-with ``--json`` — and no traceback unless ``--debug`` is given.
+Exit status (:data:`EXIT_OK`, :data:`EXIT_ERROR`, :data:`EXIT_USAGE`): 0 on success;
+1 on a runtime error — an error of the project's hierarchy, an unreadable file, or a
+check that failed (``validate``); 2 on a usage error (a bad command line, argparse's
+convention).  Either error is printed as one line ``error: …`` on stderr — a JSON
+object on stdout with ``--json`` — and no traceback unless ``--debug`` is given.
+
+Diagnostics go through :mod:`logging`, one logger per package (``ir``, ``radar``,
+``compiler``, ``backends``, named by module); ``-v`` shows their INFO records on
+stderr (what each pass did and how long it took), ``-vv`` DEBUG.  Without ``-v``
+only warnings are shown.
 
 Examples
 --------
@@ -23,18 +31,30 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import sys
 from collections.abc import Sequence
 from importlib import import_module
 
+from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
-__all__ = ["COMMAND_MODULES", "build_parser", "main"]
+__all__ = ["COMMAND_MODULES", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE", "LOGGED_PACKAGES",
+           "build_parser", "configure_logging", "main"]
+
+#: Exit status of a command that did its work.
+EXIT_OK = 0
+#: Exit status of a runtime error (a typed error, an unreadable file, a failed check).
+EXIT_ERROR = 1
+#: Exit status of a usage error (a bad command line).
+EXIT_USAGE = 2
+#: The first-party packages whose loggers ``-v`` shows.
+LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
-COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.demo", "backends.emit.command",
-                   "compiler.sweep.command")
+COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
+                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir")
 
 
 def _version() -> str:
@@ -44,10 +64,6 @@ def _version() -> str:
         return version("radarsnn")
     except PackageNotFoundError:  # running from a source tree that is not installed
         return "0+unknown"
-
-
-class UsageError(Exception):
-    """A bad command line (argparse's complaint), reported like every other error."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -65,13 +81,57 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"radarsnn {_version()}")
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an error")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log what the compiler and simulator do (-v: info, -vv: debug)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         import_module(name).add_parsers(sub)
     for command in sub.choices.values():  # also after the command: radarsnn run ... --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                              help="show the full traceback of an error")
+        command.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                             help="log what the compiler and simulator do (-v: info, -vv: debug)")
     return parser
+
+
+def configure_logging(verbosity: int, stream=None) -> logging.Handler:
+    """Show the first-party loggers' records on ``stream`` (stderr) from a level set by ``-v``.
+
+    Parameters
+    ----------
+    verbosity : int
+        0: warnings and errors; 1 (``-v``): info; 2 or more (``-vv``): debug.
+    stream : file, optional
+        Where records go (default ``sys.stderr``).
+
+    Returns
+    -------
+    logging.Handler
+        The handler added to each logger of :data:`LOGGED_PACKAGES` (replacing one an
+        earlier call added), so repeated calls in one process do not duplicate lines.
+
+    Examples
+    --------
+    >>> import io, logging
+    >>> out = io.StringIO()
+    >>> _ = configure_logging(1, out)
+    >>> logging.getLogger("compiler.passes").info("calibrate: 3 frames")
+    >>> logging.getLogger("compiler.passes").debug("not shown at -v")
+    >>> out.getvalue()
+    'compiler.passes: calibrate: 3 frames\\n'
+    >>> _ = configure_logging(0)
+    """
+    level = (logging.WARNING, logging.INFO)[verbosity] if verbosity < 2 else logging.DEBUG
+    handler = logging.StreamHandler(sys.stderr if stream is None else stream)
+    handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
+    handler.set_name("radarsnn-cli")
+    for name in LOGGED_PACKAGES:
+        log = logging.getLogger(name)
+        for old in [h for h in log.handlers if h.get_name() == "radarsnn-cli"]:
+            log.removeHandler(old)
+        log.addHandler(handler)
+        log.setLevel(level)
+    return handler
 
 
 def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
@@ -83,7 +143,7 @@ def _error_exit(err: BaseException, args: argparse.Namespace | None) -> int:
                           "node": getattr(err, "node", None)}, sort_keys=True))
     else:
         print(f"error: {message}", file=sys.stderr)
-    return 2
+    return EXIT_USAGE if isinstance(err, UsageError) else EXIT_ERROR
 
 
 def _silence_stdout() -> None:
@@ -96,18 +156,19 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 on an error, 1 on a failed check)."""
+    """Run the command line; return the exit status (0 ok, 1 runtime error, 2 usage error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = build_parser().parse_args(argv)
     except UsageError as err:
         return _error_exit(err, argparse.Namespace(json="--json" in argv))
+    configure_logging(args.verbose)
     try:
         return args.func(args)
     except BrokenPipeError:  # the reader stopped (`radarsnn schema | head`): it had its output
         _silence_stdout()
         return 0
-    except (RadarSNNError, OSError) as err:
+    except (RadarSNNError, OSError, UsageError) as err:
         if args.debug:
             raise
         return _error_exit(err, args)

@@ -1,18 +1,26 @@
-"""Chain sub-commands: ``validate``, ``schema``, ``compile``, ``report``, ``run``.
+"""Chain sub-commands: ``validate``, ``schema``, ``compile``, ``report``.
 
 ``compile`` turns a chain file into a program artifact directory (see
-:mod:`backends.program_artifact`); ``run`` simulates a program or network
-artifact on ``.npy`` inputs; ``report`` prints what a chain (or a compiled
-artifact) costs on a target.
+:mod:`backends.program_artifact`) and checks its accuracy on the calibration data;
+``report`` prints what a chain (or a compiled artifact) costs on a target.
+``run`` lives in :mod:`compiler.cli.run`.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
-from compiler.cli.arrays import MAX_NPY_BYTES, load_arrays, read_npy
+from compiler.cli.arrays import (
+    INPUT_FORMS,
+    MAX_NPY_BYTES,
+    bin_layout_argument,
+    load_arrays,
+    read_npy,
+)
+from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
 __all__ = ["MAX_NPY_BYTES", "add_parsers", "load_arrays", "parse_options", "read_npy",
@@ -20,12 +28,21 @@ __all__ = ["MAX_NPY_BYTES", "add_parsers", "load_arrays", "parse_options", "read
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    """Check every chain file; one line per bad file (naming it), non-zero if any failed."""
     from ir import Graph
 
+    failed = 0
     for path in args.chains:
-        graph = Graph.from_yaml(path)
-        graph.verify()
-        types = graph.infer_types()
+        try:
+            graph = Graph.from_yaml(path)
+            graph.verify()
+            types = graph.infer_types()
+        except (RadarSNNError, OSError) as err:
+            if getattr(args, "debug", False):
+                raise
+            failed += 1
+            _validate_error(args, path, err)
+            continue
         if args.json:
             print(json.dumps({"chain": str(path), "name": graph.name, "ok": True,
                               "nodes": len(types)}))
@@ -36,7 +53,22 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             axes = " × ".join(f"{a}:{n}" for a, n in t.axes.items())
             kind = "complex" if t.complex else "real"
             print(f"  {node_id:<12} {graph.op(node_id).op:<12} [{axes}] {kind} {t.domain}")
-    return 0
+    return 1 if failed else 0  # 1: the check failed (the files were read and judged)
+
+
+def _validate_error(args: argparse.Namespace, path: Path, err: Exception) -> None:
+    """One line for a bad chain file: ``error: FILE: …`` on stderr, or a JSON object."""
+    message = " ".join(str(err).split())
+    if isinstance(err, OSError) and not isinstance(err, RadarSNNError):
+        message = f"cannot read the chain file: {err.strerror or err}"
+    if not message.startswith(str(path)):  # every line starts with the file it is about
+        message = f"{path}: {message}"
+    if args.json:
+        print(json.dumps({"chain": str(path), "file": str(path), "ok": False,
+                          "error": message, "type": type(err).__name__,
+                          "node": getattr(err, "node", None)}, sort_keys=True))
+    else:
+        print(f"error: {message}", file=sys.stderr)
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
@@ -86,13 +118,13 @@ def parse_options(items: list[str] | None) -> dict:
     for item in items or []:
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise RadarSNNError(f"option {short_repr(item)} is not KEY=VALUE (e.g. headroom=1.5)")
+            raise UsageError(f"option {short_repr(item)} is not KEY=VALUE (e.g. headroom=1.5)")
         try:
             options[key] = load_yaml(value, error=RadarSNNError)
         except yaml.YAMLError as err:
             from ir.serialize import describe_yaml_error
 
-            raise RadarSNNError(f"option {short_repr(key)}: value {short_repr(value)} is not "
+            raise UsageError(f"option {short_repr(key)}: value {short_repr(value)} is not "
                                 f"YAML ({describe_yaml_error(err)})") from None
         except RadarSNNError as err:
             raise RadarSNNError(f"option {short_repr(key)}: {err}") from None
@@ -102,6 +134,7 @@ def parse_options(items: list[str] | None) -> dict:
 def _compile(args: argparse.Namespace, target: str | None):
     """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
     from compiler.calibration import synthetic_inputs
+    from compiler.cli.notes import GIVEN_NOTE, SYNTHETIC_NOTE
     from compiler.compile import compile_graph, default_pipeline
     from compiler.guards import check_compile, limits_from_options
     from compiler.progress import make_progress
@@ -113,17 +146,17 @@ def _compile(args: argparse.Namespace, target: str | None):
     # before the calibration arrays are read or drawn: they are part of the estimate
     check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
     if args.calibration:
-        calibration = load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}")
-        note = "calibrated on the given inputs"
-    else:
+        calibration = load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}",
+                                  bin_layout=getattr(args, "bin_layout", None))
+        note = GIVEN_NOTE
+    else:  # the counts that depend on it: compiler.cli.notes
         calibration = synthetic_inputs(graph, seed=0)
-        note = ("calibrated on synthetic noise (resources are exact; pass --calibration for "
-                "thresholds that mean something on radar data)")
+        note = SYNTHETIC_NOTE
     motifs = {}
     for m in args.motif or []:
         key, sep, value = m.partition("=")
         if not sep:
-            raise RadarSNNError(f"--motif {m!r} is not NODE_OR_OP=MOTIF (e.g. dft=time-fft)")
+            raise UsageError(f"--motif {m!r} is not NODE_OR_OP=MOTIF (e.g. dft=time-fft)")
         motifs[key] = value
     if getattr(args, "repetitions", None):
         options["repetitions"] = args.repetitions
@@ -136,22 +169,47 @@ def _compile(args: argparse.Namespace, target: str | None):
                                 progress=progress, options=options)
     finally:
         getattr(progress, "close", lambda: None)()
+    _warn_accuracy(program, calibration, note)
     return program, note
+
+
+def _warn_accuracy(program, calibration: dict, note: str) -> None:
+    """Measure the spiking segments against the conventional chain on the calibration data.
+
+    Prints one ``warning:`` line on stderr per node whose error is large
+    (:mod:`backends.reference.accuracy`) and keeps the figures in
+    ``program.records["accuracy"]`` (saved in the artifact's ``extra``).
+    """
+    from backends.reference.accuracy import check_accuracy
+    from compiler.cli.notes import GIVEN_NOTE
+
+    check = check_accuracy(program, calibration)
+    program.records["accuracy"] = check
+    data = "the calibration data" if note == GIVEN_NOTE else "the synthetic calibration noise"
+    if check.skipped:
+        print(f"note: the accuracy check was skipped ({check.skipped})", file=sys.stderr)
+    for line in check.warnings():
+        print(f"warning: {line} on {data} ({check.n_frames} frame(s)); another motif "
+              "(--motif NODE=MOTIF), more --time-steps or an exact target may keep it "
+              "(radarsnn report CHAIN -m ... compares; docs/fourier.md)", file=sys.stderr)
 
 
 def _cmd_compile(args: argparse.Namespace) -> int:
     from backends import save_program
 
     program, note = _compile(args, args.target)
-    folder = save_program(program, args.output, extra={"chain_file": str(args.chain),
-                                                        "calibration": note})
+    folder = save_program(program, args.output, extra={
+        "chain_file": str(args.chain), "calibration": note,
+        "accuracy": program.records["accuracy"].to_dict()})
     report = program.records.get("report")
     totals = report.data["totals"] if report is not None else {}
     segments = [s.kind if s.kind == "spiking" else f"host:{s.node}" for s in program.segments]
     if args.json:
         print(json.dumps({"artifact": str(folder), "chain": program.graph.name,
                           "target": program.target.name, "segments": segments,
-                          "totals": totals}, sort_keys=True, default=str))
+                          "totals": totals,
+                          "accuracy": program.records["accuracy"].to_dict()},
+                         sort_keys=True, default=str))
         return 0
     if not args.quiet:
         print(f"compiled chain {program.graph.name!r} for {program.target.name} into {folder}/")
@@ -165,12 +223,13 @@ def _cmd_compile(args: argparse.Namespace) -> int:
 
 def _cmd_report(args: argparse.Namespace) -> int:
     from backends import is_program, load_program
+    from compiler.cli.notes import artifact_note
 
     if Path(args.chain).is_dir():
         if not is_program(args.chain):
             raise RadarSNNError(f"{args.chain} is a directory but not a program artifact "
                                 "(no program.json); give a chain file or `radarsnn compile` output")
-        program, note = load_program(args.chain), "from the compiled artifact"
+        program, note = load_program(args.chain), artifact_note(args.chain)
         stored = getattr(program.target, "name", None)
         if args.target is not None and args.target != stored:
             raise RadarSNNError(f"{args.chain} was compiled for {stored or 'no target'}; its "
@@ -186,40 +245,13 @@ def _cmd_report(args: argparse.Namespace) -> int:
         report.save_core_map(args.core_map)
     if args.format == "json" or args.json:
         print(report.to_json())
+        if "synthetic noise" in note:  # stdout stays JSON; the caveat goes to stderr
+            import sys
+
+            print(f"note: {note}", file=sys.stderr)
     else:
         print(report.to_markdown())
         print(f"\n_{note}._")
-    return 0
-
-
-def _cmd_run(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from backends import is_program, load
-    from backends.reference import simulate
-
-    loaded = load(args.artifact)
-    if is_program(args.artifact):
-        ports = loaded.graph.input_ids()
-    else:
-        ports = [e.port for e in loaded.encoders]
-    inputs = load_arrays(args.input, ports, f"artifact {args.artifact}")
-    result = simulate(loaded, inputs, mode=args.mode,
-                      out_of_range="clip" if args.clip else "reject")
-    if args.output:
-        from backends.artifact_io import npz_bytes
-
-        path = args.output if str(args.output).endswith(".npz") else f"{args.output}.npz"
-        write_output(path, npz_bytes({k: np.asarray(v) for k, v in result.outputs.items()}),
-                     "the outputs")
-    if args.json:
-        print(json.dumps({"mode": result.mode, "spikes": result.total_spikes,
-                          "synaptic_events": result.total_synaptic_events,
-                          "spike_counts": result.spike_counts, "clipped": result.clipped,
-                          "outputs": {k: list(np.shape(v)) for k, v in result.outputs.items()}},
-                         sort_keys=True))
-    elif not args.quiet:
-        print(result.summary())
     return 0
 
 
@@ -228,9 +260,10 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--target", "-t", default="loihi2",
                    help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file "
                         "(default loihi2)")
-    p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
-                   help="calibration input per input node (default: seeded synthetic noise "
-                        "in each input's domain)")
+    p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]FILE",
+                   help=f"calibration input per input node: {INPUT_FORMS} (default: seeded "
+                        "synthetic noise in each input's domain)")
+    bin_layout_argument(p)
     p.add_argument("--motif", "-m", action="append", metavar="NODE_OR_OP=MOTIF",
                    help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
     p.add_argument("--time-steps", type=int, help="override the per-motif time window")
@@ -243,10 +276,12 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_parsers(sub) -> None:
-    """Add ``validate``, ``schema``, ``compile``, ``report`` and ``run`` to ``sub``."""
-    p = sub.add_parser("validate", help="check chain files and print their inferred types")
+    """Add ``validate``, ``schema``, ``compile`` and ``report`` to ``sub``."""
+    p = sub.add_parser("validate", help="check chain files and print their inferred types; "
+                                        "every file is checked, one error line per bad one")
     p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml")
-    p.add_argument("--json", action="store_true", help="one JSON line per chain")
+    p.add_argument("--json", action="store_true",
+                   help="one JSON line per chain (a bad one: ok false, file, error, type, node)")
     p.set_defaults(func=_cmd_validate)
 
     p = sub.add_parser("schema", help="print the JSON schema of chain files")
@@ -267,16 +302,3 @@ def add_parsers(sub) -> None:
     p.add_argument("--json", action="store_true", help="same as --format json")
     p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
     p.set_defaults(func=_cmd_report, target=None)  # None: loihi2, or an artifact's own
-
-    p = sub.add_parser("run", help="simulate a compiled artifact on .npy inputs")
-    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
-    p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]X.npy",
-                   help="input array per port (repeat for several ports)")
-    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
-    p.add_argument("--clip", action="store_true",
-                   help="clip input values outside the encoders' calibrated range (default: "
-                        "refuse them); the count is reported")
-    p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
-    p.add_argument("--json", action="store_true", help="print a JSON summary")
-    p.add_argument("--quiet", "-q", action="store_true", help="print nothing")
-    p.set_defaults(func=_cmd_run)

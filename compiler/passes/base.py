@@ -28,6 +28,7 @@ Examples
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
@@ -36,6 +37,8 @@ from typing import Any, ClassVar
 from compiler.program import CompiledProgram
 
 __all__ = ["Pass", "CompileContext", "run_pipeline", "Progress"]
+
+log = logging.getLogger(__name__)
 
 #: ``progress(pass_name, message)``: called by passes on long work.
 Progress = Callable[[str, str], None]
@@ -104,5 +107,6 @@ def run_pipeline(passes: Iterable[Pass], ctx: CompileContext,
         start = time.perf_counter()
         program = p.apply(ctx, program)
         timings[p.name] = time.perf_counter() - start
+        log.info("pass %s: %.3f s", p.name, timings[p.name])
         ctx.progress(p.name, "done")
     return program

@@ -48,6 +48,7 @@ Examples
 
 from __future__ import annotations
 
+import logging
 import math
 import warnings
 from dataclasses import dataclass, replace
@@ -68,6 +69,7 @@ from ir.ops import DFT, AdcInput, Add, Linear, Magnitude, Sum, Window
 
 __all__ = ["Calibrate", "CalibrationWarning", "adc_full_scales", "mixed_axes"]
 
+log = logging.getLogger(__name__)
 _POLICIES = ("static", "per-input")
 
 
@@ -257,4 +259,6 @@ class Calibrate(Pass):
             source, n_frames = ("bounds" if bounds else "none"), 0
         program.records[self.name] = Calibration(policy=policy, headroom=headroom,
                                                  source=source, nodes=nodes, n_frames=n_frames)
+        log.info("policy %s, ranges from %s (%d frame(s)), %d node(s) ranged, "
+                 "headroom %g", policy, source, n_frames, len(nodes), headroom)
         return program

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 from compiler.lowering import LoweringContext, default_registry, lower_graph
@@ -10,6 +11,8 @@ from compiler.passes.static_split import host_nodes
 from compiler.program import CompiledProgram
 
 __all__ = ["Lower"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -45,4 +48,8 @@ class Lower(Pass):
         program.records[self.name] = {
             "motifs": {n: lctx.motif_for(n) for n in program.graph.topological_order()},
         }
+        for node, motif in program.records[self.name]["motifs"].items():
+            log.debug("node %r -> motif %s", node, motif)
+        log.info("%d spiking segment(s), %d host node(s)", len(program.networks),
+                 len(program.host_nodes))
         return program

@@ -27,6 +27,7 @@ Examples
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -48,6 +49,8 @@ from ir.errors import BudgetError
 
 # Placer and greedy_placer live in place_greedy; importable from here too
 __all__ = ["Place", "Placement", "Placer", "greedy_placer", "place"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -221,6 +224,8 @@ class Place(Pass):
                     raise explain_failure(err, cands[:n], mode, len(cands)) from None
                 # the blocks did not pack: multiplex one more stage and split again
                 ctx.progress(self.name, f"multiplexing {n + 1} stage(s)")
+                log.info("the blocks did not pack (%s); time-multiplexing %d stage(s)",
+                         err, n + 1)
                 splits = split_program(networks, profile, mode, start=n + 1)
         program.records["split"] = splits
         program.records["placement"] = placement
