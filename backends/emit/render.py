@@ -11,7 +11,13 @@ appear inside a string literal or a comment built by :func:`comment`, never
 in a code position.
 
 Templates are :class:`string.Template` texts: the files of
-``backends/emit/templates/`` (:func:`template`) or short inline ones.
+``backends/emit/templates/`` (:func:`template`) or short inline ones.  Deliberately
+not a template engine such as Jinja2: its expressions, filters and loops would let
+a template compute text outside the :class:`Code` discipline (and its autoescaping
+is for HTML, not Python); with ``$field`` substitution only, every character a
+template adds is either its own text or a checked ``Code``, and the structure of
+the generated code (loops over populations, branches per phase) stays in typed
+Python (:mod:`backends.emit.numpy_network`).
 
 Examples
 --------

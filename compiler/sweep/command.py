@@ -43,6 +43,8 @@ def format_rows(result: SweepResult) -> str:
         elif not row["complete"]:
             cells["error"] = "incomplete"
         table.append(cells)
+    # Not tabulate: its "plain" format is these four lines of width arithmetic, and the sweep
+    # extra (dask, tqdm) would carry one more dependency for it; the cells are formatted above.
     columns = list(dict.fromkeys(k for r in table for k in r))
     widths = {c: max(len(c), *(len(r.get(c, "")) for r in table)) for c in columns}
     lines = ["  ".join(c.ljust(widths[c]) for c in columns).rstrip()]
