@@ -39,6 +39,7 @@ except PackageNotFoundError:  # run from a source tree that was never installed
 
 __all__ = [
     "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
-    "check_accuracy", "compile_graph", "evaluate", "load", "load_program", "run_program", "save", "save_program",
+    "check_accuracy", "compile_graph",
+    "evaluate", "load", "load_program", "run_program", "save", "save_program",
     "simulate", *_errors.__all__,
 ]

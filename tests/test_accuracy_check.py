@@ -1,4 +1,4 @@
-"""The accuracy check: compile warns, with the figure, when a motif is far from the conventional chain.
+"""The accuracy check: compile warns, with the figure, when a motif is far from the reference.
 
 Issue 19, item 9: ``-m rng=time-fft`` on the TI chirps gave many times the conventional
 detections without a word.
