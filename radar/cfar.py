@@ -16,18 +16,22 @@ Convention
 * CFAR runs over the last ``d`` axes, ``d`` = the length of ``guard``/``train``/``edge``
   when any is a sequence, else ``x.ndim``; leading axes are a batch.
 
-The window geometry (stencil, ``n_avail``, ``k_eff``) lives in :mod:`radar.cfar_window`.
+The window geometry lives in :mod:`radar.cfar_window`, the kernels in :mod:`radar.cfar_fast`
+(CA; OS decisions) and :mod:`radar.cfar_gather` (OS thresholds; the original code, the
+bit-for-bit reference of ``_reference_noise_estimate`` / ``_reference_cfar``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from ir.errors import RadarConfigError
-from radar.cfar_window import _mask, _stencil, effective_k, training_counts
+from radar.cfar_fast import ca_noise, os_detect
+from radar.cfar_gather import gather_noise
+from radar.cfar_window import _mask, _stencil, training_counts
 
 __all__ = [
     "CFAR_KINDS",
@@ -37,61 +41,23 @@ __all__ = [
 ]
 
 CFAR_KINDS = ("ca", "os")
-#: Training-cell values gathered per block (float64): bounds peak memory to a few x 16 MB.
-_BLOCK_ELEMENTS = 1 << 21
 
 
-def _ca_rows(vals: np.ndarray, n_avail: np.ndarray, k: int | None, n_total: int) -> np.ndarray:
-    """Mean of the non-NaN entries of each row."""
-    if np.all(n_avail == n_total):
-        return vals.sum(axis=-1) / n_total
-    return np.where(np.isnan(vals), 0.0, vals).sum(axis=-1) / n_avail
+@dataclass(frozen=True)
+class _Window:
+    """A validated CFAR problem: the float64 map(s) and one entry per CFAR axis."""
 
+    arr: np.ndarray
+    guard: tuple[int, ...]
+    train: tuple[int, ...]
+    edge: tuple[str, ...]
+    k: int | None
+    counts: np.ndarray
 
-def _os_rows(vals: np.ndarray, n_avail: np.ndarray, k: int, n_total: int) -> np.ndarray:
-    """k_eff-th largest non-NaN entry of each row (NaN sorts last in numpy)."""
-    full = n_avail == n_total
-    if full.all():
-        return np.partition(vals, n_total - k, axis=-1)[:, n_total - k]
-    out = np.empty(vals.shape[0])
-    if full.any():
-        out[full] = np.partition(vals[full], n_total - k, axis=-1)[:, n_total - k]
-    part = ~full
-    n_part = n_avail[part]
-    pos = n_part - effective_k(k, n_part, n_total)
-    out[part] = np.take_along_axis(np.sort(vals[part], axis=-1), pos[:, None], axis=-1)[:, 0]
-    return out
-
-
-#: Noise estimators by CFAR kind: (training values with NaN = missing, n_avail, k, N) -> noise.
-_ESTIMATORS: Mapping[str, Callable[..., np.ndarray]] = {"ca": _ca_rows, "os": _os_rows}
-
-
-def _blocks(n_batch: int, n_rows: int, rows_per_block: int) -> Iterator[tuple[slice, slice]]:
-    """(batch slice, first-map-axis slice) pairs covering the input in bounded blocks."""
-    if rows_per_block >= n_rows:
-        step = rows_per_block // n_rows
-        for b0 in range(0, n_batch, step):
-            yield slice(b0, b0 + step), slice(None)
-    else:
-        for b in range(n_batch):
-            for r0 in range(0, n_rows, rows_per_block):
-                yield slice(b, b + 1), slice(r0, r0 + rows_per_block)
-
-
-def _pad(
-    arr: np.ndarray, guard: tuple[int, ...], train: tuple[int, ...], edge: tuple[str, ...]
-) -> np.ndarray:
-    """Pad the last ``len(guard)`` axes by ``g+t`` per side: circularly or with NaN."""
-    lead = [(0, 0)] * (arr.ndim - len(guard))
-    reach = [g + t for g, t in zip(guard, train, strict=True)]
-    for mode, np_mode, fill in (
-        ("wrap", "wrap", {}),
-        ("clip", "constant", {"constant_values": np.nan}),
-    ):
-        widths = [(r, r) if m == mode else (0, 0) for r, m in zip(reach, edge, strict=True)]
-        arr = np.pad(arr, lead + widths, mode=np_mode, **fill)
-    return arr
+    @property
+    def geometry(self) -> dict:
+        """Keyword arguments of the kernels in radar.cfar_fast / radar.cfar_gather."""
+        return {"guard": self.guard, "train": self.train, "edge": self.edge, "counts": self.counts}
 
 
 def _check_input(x: object) -> np.ndarray:
@@ -110,6 +76,58 @@ def _check_input(x: object) -> np.ndarray:
             "replace them (e.g. np.nan_to_num) before CFAR"
         )
     return arr
+
+
+def _window(
+    x: object,
+    kind: str,
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    k: int | None,
+    edge: str | Sequence[str],
+) -> _Window:
+    """Validate a CFAR call (errors as :func:`noise_estimate` documents them)."""
+    if not isinstance(kind, str) or kind not in CFAR_KINDS:
+        raise RadarConfigError(
+            f"CFAR kind={kind!r} is not valid; use 'ca' (cell average) or 'os' (ordered statistic)"
+        )
+    arr = _check_input(x)
+    g, t, e = _stencil(guard, train, edge, default_ndim=arr.ndim)
+    d = len(g)
+    if d > arr.ndim:
+        raise RadarConfigError(
+            f"guard/train/edge describe a {d}-D window but x has only {arr.ndim} dimension(s)"
+        )
+    mask = _mask(g, t)
+    n_total = int(mask.sum())
+    if kind == "ca" and k is not None:
+        raise RadarConfigError(f"k={k!r} is only used by kind='os'; pass k=None for CA-CFAR")
+    if kind == "os" and (
+        isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= n_total
+    ):
+        raise RadarConfigError(
+            f"OS-CFAR k={k!r} must be an integer in 1..{n_total} (k-th largest of the "
+            f"N={n_total} training cells for guard={list(g)}, train={list(t)}); "
+            f"e.g. k={max(1, (3 * n_total) // 4)} (~3N/4)"
+        )
+    map_shape = arr.shape[arr.ndim - d :]
+    for i, (n, gi, ti, mode) in enumerate(zip(map_shape, g, t, e, strict=True)):
+        if mode == "wrap" and 2 * (gi + ti) + 1 > n:
+            raise RadarConfigError(
+                f"edge='wrap' on CFAR axis {i} (length {n}) needs the window "
+                f"2*(guard+train)+1 = {2 * (gi + ti) + 1} <= {n}; reduce guard/train on "
+                "that axis or use edge='clip'"
+            )
+    counts = training_counts(map_shape, guard=g, train=t, edge=e)
+    if counts.min() < 1:
+        cell = tuple(int(c) for c in np.unravel_index(np.argmin(counts), counts.shape))
+        raise RadarConfigError(
+            f"map shape {map_shape} is too small for guard={list(g)}, train={list(t)} with "
+            f"edge={list(e)}: cell {cell} has no training cell inside the map; enlarge the "
+            "map, reduce guard, or use edge='wrap'"
+        )
+
+    return _Window(arr, g, t, e, k, counts)
 
 
 def noise_estimate(
@@ -157,69 +175,18 @@ def noise_estimate(
 
     Notes
     -----
-    Pads each axis by ``g_i + t_i`` (circularly, or with NaN for clip), takes a
-    ``sliding_window_view`` and gathers the masked training cells block by block
-    (about ``2**21`` values per block), so memory stays bounded for large maps.
-    OS uses ``np.partition`` for cells with the full training set and a sort for
-    the clipped border cells; its estimate is exactly one of the inputs. CA sums
-    with numpy's reduction, whose order can depend on the block shape, so CA
-    results are exact up to ~1 ulp (exact for integer-valued maps).
+    CA sums each cell's training values in stencil (raster) order, ``((0 + v_0) + v_1)
+    + ...``, on whole shifted maps (:func:`radar.cfar_fast.window_sums`), or by
+    summed-area tables where that is provably exact (integer-valued maps); the result is
+    bit-equal to the original gathered implementation. OS gathers each cell's training
+    values (:func:`radar.cfar_gather.gather_noise`: ``np.partition``, a sort on clipped
+    border cells); its estimate is exactly one of the inputs. :func:`cfar` does not
+    need the OS estimate and counts instead (much faster, same decisions).
     """
-    if not isinstance(kind, str) or kind not in CFAR_KINDS:
-        raise RadarConfigError(
-            f"CFAR kind={kind!r} is not valid; use 'ca' (cell average) or 'os' (ordered statistic)"
-        )
-    arr = _check_input(x)
-    g, t, e = _stencil(guard, train, edge, default_ndim=arr.ndim)
-    d = len(g)
-    if d > arr.ndim:
-        raise RadarConfigError(
-            f"guard/train/edge describe a {d}-D window but x has only {arr.ndim} dimension(s)"
-        )
-    mask = _mask(g, t)
-    n_total = int(mask.sum())
-    if kind == "ca" and k is not None:
-        raise RadarConfigError(f"k={k!r} is only used by kind='os'; pass k=None for CA-CFAR")
-    if kind == "os" and (
-        isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= n_total
-    ):
-        raise RadarConfigError(
-            f"OS-CFAR k={k!r} must be an integer in 1..{n_total} (k-th largest of the "
-            f"N={n_total} training cells for guard={list(g)}, train={list(t)}); "
-            f"e.g. k={max(1, (3 * n_total) // 4)} (~3N/4)"
-        )
-    map_shape = arr.shape[arr.ndim - d :]
-    for i, (n, gi, ti, mode) in enumerate(zip(map_shape, g, t, e, strict=True)):
-        if mode == "wrap" and 2 * (gi + ti) + 1 > n:
-            raise RadarConfigError(
-                f"edge='wrap' on CFAR axis {i} (length {n}) needs the window "
-                f"2*(guard+train)+1 = {2 * (gi + ti) + 1} <= {n}; reduce guard/train on "
-                "that axis or use edge='clip'"
-            )
-    counts = training_counts(map_shape, guard=g, train=t, edge=e)
-    if counts.min() < 1:
-        cell = tuple(int(c) for c in np.unravel_index(np.argmin(counts), counts.shape))
-        raise RadarConfigError(
-            f"map shape {map_shape} is too small for guard={list(g)}, train={list(t)} with "
-            f"edge={list(e)}: cell {cell} has no training cell inside the map; enlarge the "
-            "map, reduce guard, or use edge='wrap'"
-        )
-
-    padded = _pad(arr, g, t, e)
-    n_batch = int(np.prod(arr.shape[: arr.ndim - d], dtype=np.int64))
-    padded = padded.reshape((n_batch, *padded.shape[arr.ndim - d :]))
-    view = sliding_window_view(padded, mask.shape, axis=tuple(range(1, d + 1)))
-    out = np.empty((n_batch, *map_shape))
-    cells_per_row = int(np.prod(map_shape[1:], dtype=np.int64))
-    rows_per_block = max(1, _BLOCK_ELEMENTS // (cells_per_row * n_total))
-    estimator = _ESTIMATORS[kind]
-    for bs, rs in _blocks(n_batch, map_shape[0], rows_per_block):
-        vals = view[bs, rs][..., mask]
-        block_shape = vals.shape[:-1]
-        n_avail = np.broadcast_to(counts[rs], block_shape).reshape(-1)
-        est = estimator(vals.reshape(-1, n_total), n_avail, k, n_total)
-        out[bs, rs] = est.reshape(block_shape)
-    return out.reshape(arr.shape)
+    w = _window(x, kind, guard, train, k, edge)
+    if kind == "ca":
+        return ca_noise(w.arr, **w.geometry)
+    return gather_noise(w.arr, kind=kind, k=k, **w.geometry)
 
 
 def _alpha(alpha: object) -> float:
@@ -317,7 +284,33 @@ def cfar(
 
     Notes
     -----
-    Equal values never detect: ``x = alpha * noise`` is not a detection.
+    Equal values never detect: ``x = alpha * noise`` is not a detection. OS decisions
+    are counted, not thresholded: ``x > alpha * T`` (``T`` the ``k_eff``-th largest)
+    iff fewer than ``k_eff`` training cells have ``alpha * v >= x``
+    (:func:`radar.cfar_fast.os_detect`), the same decisions as ``x > cfar_threshold(x)``.
     """
-    threshold = cfar_threshold(x, kind=kind, guard=guard, train=train, alpha=alpha, k=k, edge=edge)
-    return np.asarray(x, dtype=np.float64) > threshold
+    a = _alpha(alpha)
+    w = _window(x, kind, guard, train, k, edge)
+    if kind == "os":
+        return os_detect(w.arr, k=k, alpha=a, **w.geometry)
+    return w.arr > a * ca_noise(w.arr, **w.geometry)
+
+
+def _reference_noise_estimate(
+    x: object,
+    *,
+    kind: str,
+    guard: int | Sequence[int],
+    train: int | Sequence[int],
+    k: int | None = None,
+    edge: str | Sequence[str] = "clip",
+) -> np.ndarray:
+    """:func:`noise_estimate` by the original gathered implementation (tests, benchmarks)."""
+    w = _window(x, kind, guard, train, k, edge)
+    return gather_noise(w.arr, kind=kind, k=k, **w.geometry)
+
+
+def _reference_cfar(x: object, *, alpha: float, **params: object) -> np.ndarray:
+    """:func:`cfar` by the original implementation: ``x > alpha * gathered noise``."""
+    a = _alpha(alpha)
+    return np.asarray(x, dtype=np.float64) > a * _reference_noise_estimate(x, **params)

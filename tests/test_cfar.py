@@ -12,7 +12,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from scipy.special import gammaln
 
-import radar.cfar as cfar_module
+import radar.cfar_gather as gather_module
 from ir.errors import RadarConfigError
 from radar.cfar import cfar, cfar_threshold, noise_estimate
 from radar.cfar_theory import ca_alpha, ca_pfa, os_alpha, os_pfa
@@ -118,16 +118,16 @@ def test_decisions_match_brute_force_exactly(case, alpha):
 
 @given(case=cfar_cases(integer_values=False), block=st.integers(1, 40))
 def test_blocking_does_not_change_results(case, block):
-    """Tiny blocks (values gathered at once) give the same result as one block."""
+    """Tiny gather blocks (values gathered at once) give the same result as one block."""
     x, kind, guard, train, k, edge = case
     assume(reference_noise(x, kind, guard, train, k, edge) is not None)
     whole = noise_estimate(x, kind=kind, guard=guard, train=train, k=k, edge=edge)
-    saved = cfar_module._BLOCK_ELEMENTS
-    cfar_module._BLOCK_ELEMENTS = block
+    saved = gather_module._BLOCK_ELEMENTS
+    gather_module._BLOCK_ELEMENTS = block
     try:
         blocked = noise_estimate(x, kind=kind, guard=guard, train=train, k=k, edge=edge)
     finally:
-        cfar_module._BLOCK_ELEMENTS = saved
+        gather_module._BLOCK_ELEMENTS = saved
     if kind == "os":
         np.testing.assert_array_equal(blocked, whole)
     else:  # numpy may order a row sum differently for other block shapes: 1-ulp effects
