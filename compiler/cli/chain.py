@@ -63,6 +63,7 @@ def _validate_error(args: argparse.Namespace, path: Path, err: Exception) -> Non
         message = f"cannot read the chain file: {err.strerror or err}"
     if not message.startswith(str(path)):  # every line starts with the file it is about
         message = f"{path}: {message}"
+    message = " ".join(message.split())  # one line, also for a file name holding newlines
     if args.json:
         print(json.dumps({"chain": str(path), "file": str(path), "ok": False,
                           "error": message, "type": type(err).__name__,
@@ -255,6 +256,16 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _motif_help() -> str:
+    """The motifs per op, from the registry the compiler uses."""
+    from compiler.lowering import default_registry
+
+    described = default_registry().describe()
+    return "motifs: " + "; ".join(
+        f"{op}: {', '.join(d['motifs'])}" for op, d in sorted(described.items())
+        if len(d["motifs"]) > 1)
+
+
 def _compile_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("chain", type=Path, metavar="CHAIN.yaml")
     p.add_argument("--target", "-t", default="loihi2",
@@ -265,7 +276,8 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
                         "synthetic noise in each input's domain)")
     bin_layout_argument(p)
     p.add_argument("--motif", "-m", action="append", metavar="NODE_OR_OP=MOTIF",
-                   help="motif choice, e.g. dft=time-fft or mag=host (repeatable)")
+                   help="motif choice, e.g. dft=time-fft or mag=host (repeatable); "
+                        + _motif_help())
     p.add_argument("--time-steps", type=int, help="override the per-motif time window")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",
                    help="compile option (see docs/compiler.md), VALUE read as YAML")
