@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 from ir import Graph
 from ir.errors import BudgetError, CompileError
 from ir.limits import check_limit, check_value_sizes
+from ir.ops import DFT, Linear
 from ir.types import TensorType
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_BYTES", "NEURON_S", "WEIGHT_S",
@@ -65,7 +66,8 @@ NEURON_S = 2e-6
 #: Compile time per dense weight entry, s (build, quantize, count).
 WEIGHT_S = 1e-8
 _WEIGHT_COPIES = 3
-_WEIGHT_OPS = ("dft", "linear")
+#: Op types lowered to weight matrices (compiler.lowering.dft_common.op_weights).
+_WEIGHT_OPS = (DFT, Linear)
 
 
 @dataclass(frozen=True)
@@ -123,7 +125,7 @@ def estimate_compile(graph: Graph) -> CompileEstimate:
         neurons = t.size * _parts(t)
         total = 2 * t.nbytes + NEURON_BYTES * neurons
         time_s += NEURON_S * neurons
-        if op.op in _WEIGHT_OPS:
+        if isinstance(op, _WEIGHT_OPS):
             src = types[graph.inputs_of(node)[0]]
             axis = op.axis
             out_axis = getattr(op, "out_axis", None) or axis

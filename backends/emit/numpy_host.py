@@ -19,13 +19,30 @@ import numpy as np
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, indent, join, lit, render, template
 from ir.errors import CompileError
-from ir.ops import CFAR, DFT, Add, Linear, Log, Magnitude, Op, Output, Sum, Threshold, Window
+from ir.ops import (
+    CFAR,
+    DFT,
+    AdcInput,
+    Add,
+    Classifier,
+    Cluster,
+    Input,
+    Linear,
+    Log,
+    Magnitude,
+    Op,
+    Output,
+    Sum,
+    Threshold,
+    Track,
+    Window,
+)
 from ir.types import TensorType
 from radar.cfar_window import _mask, effective_k, training_counts
 from radar.dsp import dft_bins
 from radar.windows import window_coefficients
 
-__all__ = ["HOST_EMITTERS", "emit_host"]
+__all__ = ["HOST_EMITTERS", "NOT_EMITTED", "emit_host"]
 
 HostEmitter = Callable[[PackageBuilder, str, str, Op, TensorType], Code]
 
@@ -157,6 +174,17 @@ HOST_EMITTERS: dict[type[Op], HostEmitter] = {
     Threshold: _threshold,
     CFAR: _cfar,
     Output: _output,
+}
+
+#: Op types the generated numpy package cannot run on the host, and why (emit refuses them,
+#: naming the node; every op of ``ir.ops.OP_REGISTRY`` is here or in :data:`HOST_EMITTERS`).
+NOT_EMITTED: dict[type[Op], str] = {
+    Input: "a graph input: the package's run() takes it as an array",
+    AdcInput: "a graph input: the package's run() takes it as an array",
+    Classifier: "its weights live in a file beside the chain; the package would have to ship "
+                "and load them (not yet)",
+    Cluster: "needs scikit-learn's DBSCAN, which the package does not depend on",
+    Track: "a stateful tracker across frames; the package runs one frame per call",
 }
 
 

@@ -23,8 +23,9 @@ see :mod:`compiler.calibration`): what per-bin stage gains are set from.
 Calibration inputs are evaluated with :func:`ir.evaluate.evaluate` and the
 context's evaluators (``CompileContext.evaluators``), so a chain holding an op of
 the user's own is measured like any other.  Bound propagation (no calibration
-inputs): ``window`` keeps the bound, ``dft``/``linear`` give
-``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b``; other ops get no bound.
+inputs): one rule per op type in :mod:`compiler.calibration_bounds` (``window`` keeps
+the bound, ``dft``/``linear`` give ``max_k Σ_l (|Re W_kl| + |Im W_kl|) · b`` …); the
+ops without one say why there.
 
 Examples
 --------
@@ -57,15 +58,15 @@ import networkx as nx
 import numpy as np
 
 from compiler.calibration import Calibration, NodeCalibration, measure, second_moment
+from compiler.calibration_bounds import propagate_bounds
 from compiler.guards import MAX_MEMORY_BYTES
-from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
 from compiler.snn.coding import normalize_values
 from ir import Graph
 from ir.errors import CompileError
 from ir.evaluate import evaluate
-from ir.ops import DFT, AdcInput, Add, Linear, Magnitude, Sum, Window
+from ir.ops import DFT, AdcInput, Linear, Sum, Window
 
 __all__ = ["Calibrate", "CalibrationWarning", "adc_full_scales", "mixed_axes"]
 
@@ -134,24 +135,9 @@ def _frames(graph: Graph, inputs: dict) -> tuple[list[dict[str, np.ndarray]], in
 
 
 def _propagate(graph: Graph, bounds: dict[str, float]) -> dict[str, NodeCalibration]:
+    """Node records from :func:`compiler.calibration_bounds.propagate_bounds`."""
     types = graph.infer_types()
-    out: dict[str, float] = {}
-    for node in graph.topological_order():
-        op, args = graph.op(node), graph.inputs_of(node)
-        if node in bounds:
-            out[node] = float(bounds[node])
-        elif isinstance(op, Window) and args[0] in out:
-            out[node] = out[args[0]]
-        elif isinstance(op, DFT | Linear) and args[0] in out:
-            w = op_weights(op, types[args[0]].axes[op.axis], node=node)
-            out[node] = float((np.abs(w.real) + np.abs(w.imag)).sum(axis=1).max()) * out[args[0]]
-        elif isinstance(op, Magnitude) and args[0] in out:  # parts bounded by b
-            b, n = out[args[0]], 2 if types[args[0]].complex else 1
-            out[node] = {"l2": math.sqrt(n) * b, "l1": n * b, "square": n * b * b}[op.kind]
-        elif isinstance(op, Add) and all(a in out for a in args):
-            out[node] = out[args[0]] + out[args[1]]
-        elif isinstance(op, Sum) and args[0] in out:
-            out[node] = types[args[0]].axes[op.axis] * out[args[0]]
+    out = propagate_bounds(graph, bounds)
     return {n: NodeCalibration(node=n, max_re=b, max_im=b if types[n].complex else 0.0,
                                max_abs=b * (math.sqrt(2) if types[n].complex else 1.0),
                                max_l1=2 * b if types[n].complex else b, min=-b, max=b,
