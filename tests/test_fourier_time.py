@@ -36,7 +36,8 @@ def compile_time(graph: Graph, calib: dict, **options) -> CompiledProgram:
     ctx = CompileContext(options={"time_steps": 256, "encoder_headroom": 1, **options},
                          calibration_inputs=calib,
                          lowering=default_registry())
-    return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
+    calibrate = Calibrate(policy=options.get("calibration", "static"))  # the pass's own field
+    return run_pipeline([Verify(), FuseLinear(), calibrate, Lower()], ctx,
                         CompiledProgram(graph=graph))
 
 
