@@ -72,10 +72,10 @@ EXTRA_OPTIONS = {
     "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
     "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
     "stream_bits": "resonator: bits of the bit-plane stream code of each input part",
-    "resonator_readout": "resonator: output code, 'time' (time-linear ± parts) | 'graded'",
-    "resonator_coef_bits": "resonator: fraction bits of fixed-point rotation coefficients (12)",
+    "resonator_readout": "resonator: output code, auto | time (time-linear ± parts) | graded",
+    "resonator_coef_bits": "resonator: fraction bits of fixed-point rotation coefficients",
     "resonator_decay": "resonator: decay rho in (0, 1] per step (1: none, the plain DFT)",
-    "resonator_drift_max": "resonator: refuse a layer whose drift bound exceeds this (0.05)",
+    "resonator_drift_max": "resonator: refuse a layer whose drift bound exceeds this (0.01)",
     # typed fields of their pass or motif (the description says what the value must be)
     **{n: f"{f.description} — {(m.__doc__ or '').splitlines()[0]}"
        for m in (StaticSplitOptions, TimeInputOptions) for n, f in m.model_fields.items()},

@@ -35,8 +35,16 @@ from typing import Any
 import numpy as np
 
 from backends.brian2.equations import neuron_code
+from backends.brian2.resonator import (
+    ON_PRE,
+    SYNAPSE_MODEL,
+    compartment_constants,
+    fan_to_compartments,
+    resonator_code,
+)
 from backends.brian2.synapses import EXPANDERS, SynapseList, expand_projection
 from compiler.snn.network import SpikingNetwork
+from compiler.snn.resonator import ResonatorParams
 from ir.errors import SimulationError
 
 __all__ = ["Brian2Model", "build_model", "SUB_SLOTS"]
@@ -117,14 +125,19 @@ def build_model(
                                            np.asarray(steps, np.float64) * ms, dt=1 * ms)
             _at(group, k, 2)
         else:
-            code = neuron_code(pop.params, network.n_steps)
+            resonator = isinstance(pop.params, ResonatorParams)
+            code = (resonator_code if resonator else neuron_code)(pop.params, network.n_steps)
             namespace = {**code.constants,
                          **{name: b2.TimedArray(getattr(code, name), dt=1 * ms)
                             for name in ("bias", "input_on", "spiking_on")}}
             group = b2.NeuronGroup(n, code.model, threshold=code.threshold, reset=code.reset,
                                    namespace=namespace, dt=1 * ms)
             scale = pop.params.scale_of(pop.shape)
-            if scale is not None:
+            if resonator:
+                for name, values in compartment_constants(pop.params, pop.shape,
+                                                          n_frames).items():
+                    setattr(group, name, values)
+            elif scale is not None:
                 group.c = np.tile(scale, n_frames)
             updater = group.run_regularly(code.update, dt=1 * ms)
             _at(updater, k, 1)
@@ -144,11 +157,19 @@ def build_model(
         if not len(syn):
             continue
         backward = int(index[proj.source] >= index[proj.target])
-        s = b2.Synapses(groups[proj.source], groups[proj.target], "w : 1 (constant)",
-                        on_pre="I_in_post += w", dt=1 * ms)
-        s.connect(i=syn.pre, j=syn.post)
-        s.w = syn.weight
-        s.delay = (syn.delay - backward).astype(np.float64) * ms
+        if isinstance(tgt.params, ResonatorParams):  # the folded drive of all compartments
+            pre, post, wx, wy, delay = fan_to_compartments(syn)
+            s = b2.Synapses(groups[proj.source], groups[proj.target], SYNAPSE_MODEL,
+                            on_pre=ON_PRE, dt=1 * ms)
+            s.connect(i=pre, j=post)
+            s.wx, s.wy = wx, wy
+        else:
+            s = b2.Synapses(groups[proj.source], groups[proj.target], "w : 1 (constant)",
+                            on_pre="I_in_post += w", dt=1 * ms)
+            s.connect(i=syn.pre, j=syn.post)
+            s.w = syn.weight
+            delay = syn.delay
+        s.delay = (delay - backward).astype(np.float64) * ms
         _at(s.pre, index[proj.target], 0)
         synapses[proj.id] = (s, syn)
     objects = [*groups.values(), *monitors.values(), *(s for s, _ in synapses.values())]

@@ -31,6 +31,8 @@ from compiler.snn.coding import N_PARTS, Decoder, Encoder, LatencyCode
 from compiler.snn.network import Population
 from compiler.snn.neurons import DECAY_ONE
 from compiler.snn.projections import MatrixProjection
+from compiler.snn.resonator import ResonatorParams
+from ir.errors import CompileError
 
 __all__ = ["DECODER_INPUT", "decode_function", "deliver_function", "encode_function",
            "node_of", "update_function"]
@@ -80,6 +82,10 @@ def _phase(sp_: StepParams, bias: float | int, input_on: bool, spiking_on: bool)
 
 def update_function(pkg: PackageBuilder, module: str, pop: Population, sp_: StepParams) -> str:
     """Write the folded neuron update of ``pop``; return its function name."""
+    if isinstance(pop.params, ResonatorParams):
+        raise CompileError(f"population {pop.id!r}: the numpy emitter has no resonator update "
+                           "(motif 'resonator'); simulate it with backends.reference or "
+                           "compile that node with motif 'time'", node=pop.origin.get("node"))
     fn = pkg.function(module, "update_", pop.id)
     segs = sp_.segments
     if len(segs) == 1:

@@ -54,6 +54,7 @@ from backends.nir.neurons import bias_of, neuron_nodes, origin_node, scaled_bias
 from backends.nir.report import ExportReport
 from compiler.program import CompiledProgram
 from compiler.snn.network import SpikingNetwork
+from compiler.snn.resonator import ResonatorParams
 from ir.errors import ArtifactError
 
 __all__ = ["export_network", "export_program", "write_nir", "nir_name", "MAX_WEIGHTS",
@@ -96,6 +97,12 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
                  dt_s: float, prefix: str, max_weights: int) -> None:
     net.validate()
     pops = net.population
+    for pop in net.populations:
+        if isinstance(pop.params, ResonatorParams):
+            raise ArtifactError(f"population {pop.id!r}: NIR export has no node for the "
+                                "resonate-and-fire neurons of motif 'resonator'; export a "
+                                "chain compiled with motif 'time' for that node",
+                                node=pop.origin.get("node"))
     encoders = {e.population: e for e in net.encoders}
     entry, exit_ = {}, {}
     affine_bias = {}  # target pop -> the projection that carries its constant bias

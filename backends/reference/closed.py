@@ -29,8 +29,9 @@ from backends.reference.encoding import Train
 from backends.reference.gate import is_gated_segment, solve_gated
 from backends.reference.order import first_spike_steps, order_by_step
 from backends.reference.plan import SimPlan, closed_form_problems
+from backends.reference.resonator import ResonatorStepParams, solve_resonator
 from backends.reference.result import Activity
-from backends.reference.segments import Arrivals, charge, driven, silent
+from backends.reference.segments import Arrivals, charge, drive, driven, silent
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 
@@ -145,6 +146,25 @@ def _solve(
     n = n_frames * pop.size
     dtype = np.int64 if plan.integer else np.float64
     u, v, first = np.zeros(n, dtype), np.zeros(n, dtype), np.full(n, -1, np.int64)
+    if isinstance(params, ResonatorStepParams):
+        v = solve_resonator(params, lambda s0, s1: drive(arrivals, s0, s1, n_frames, pop.dims,
+                                                         dtype), n, first, charge)
+    else:
+        v = _solve_neurons(plan, pid, params, arrivals, spikes, n_frames, block_bytes, u, v,
+                           first)
+    flat = np.flatnonzero(first >= 0)
+    if not any(q.source == pid for q in plan.network.projections):
+        return (flat, first[flat]), v.reshape(n_frames, -1), first  # nobody reads them by step
+    order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
+    return (flat[order], first[flat][order]), v.reshape(n_frames, -1), first
+
+
+def _solve_neurons(plan: SimPlan, pid: str, params, arrivals: list, spikes: dict,
+                   n_frames: int, block_bytes: int, u: np.ndarray, v: np.ndarray,
+                   first: np.ndarray) -> np.ndarray:
+    """End membranes of an IF/LIF population, segment by segment; fills ``first``."""
+    pop = plan.populations[pid]
+    n = n_frames * pop.size
     simple = params.dv == 0.0 and params.du in (0.0, 1.0)
     block = max(1, block_bytes // (3 * 8 * n))
     for i, seg in enumerate(params.segments):
@@ -163,10 +183,6 @@ def _solve(
             for s0 in range(seg.start, seg.stop, block):
                 part = seg._replace(start=s0, stop=min(s0 + block, seg.stop))
                 u, v = driven(u, v, first, part, params, arrivals, n_frames, pop.dims)
-    flat = np.flatnonzero(first >= 0)
-    if not any(q.source == pid for q in plan.network.projections):
-        return (flat, first[flat]), v.reshape(n_frames, -1), first  # nobody reads them by step
-    order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
-    return (flat[order], first[flat][order]), v.reshape(n_frames, -1), first
+    return v
 
 

@@ -9,6 +9,9 @@ the encoder's code type through the registry :data:`TRAINS`:
 :class:`LatencyTrain`
     one spike per value at ``code.spike_steps(x)`` when that step is before the
     window end ``t_max`` (and before ``n_steps``).
+:class:`StreamTrain`
+    bit-plane spikes of a stream code (:mod:`compiler.snn.stream`): sample ``n`` of the
+    streamed axis at step ``start_step + n``.
 :class:`RateTrain`
     regular trains: a spike at step ``t`` iff
     ``floor((t+1)·r + φ) > floor(t·r + φ)`` (``code.spikes_at``), over all steps.
@@ -30,9 +33,10 @@ from backends.reference.input_range import DEFAULT_POLICY, check_policy, check_r
 from backends.reference.order import order_by_step
 from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
+from compiler.snn.stream import BIT_AXIS, StreamCode
 from ir.errors import NetworkError, SimulationError
 
-__all__ = ["LatencyTrain", "RateTrain", "TRAINS", "encode_inputs", "value_shape"]
+__all__ = ["LatencyTrain", "RateTrain", "StreamTrain", "TRAINS", "encode_inputs", "value_shape"]
 
 _CHUNK_ELEMENTS = 1 << 22
 
@@ -119,10 +123,49 @@ class RateTrain:
         return np.concatenate(flats), np.concatenate(steps).astype(np.int64)
 
 
-Train = LatencyTrain | RateTrain
+@dataclass(frozen=True, eq=False)
+class StreamTrain:
+    """Bit-plane spikes of a stream code: sample ``n`` at step ``start_step + n``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from compiler.snn.stream import StreamCode
+    >>> code = StreamCode(axis="n", length=2, inner=1, bits=2, x_max=3.0, start_step=1)
+    >>> tr = StreamTrain.build(code, np.array([[3.0, 2.0]]), n_steps=4)
+    >>> [tr.events_at(t).tolist() for t in range(4)], [a.tolist() for a in tr.all_events()]
+    ([[], [0, 1], [1], []], [[0, 1, 1], [1, 1, 2]])
+    """
+
+    planes: np.ndarray  # (length, frames·size) spikes per streamed index
+    start: int
+    #: Bit neurons spike once per sample whose bit is set.
+    at_most_once: ClassVar[bool] = False
+
+    @classmethod
+    def build(cls, code: StreamCode, values: np.ndarray, n_steps: int) -> StreamTrain:
+        """Bit planes of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
+        planes = code.bit_planes(values)[:max(0, n_steps - code.start_step)]
+        return cls(planes, code.start_step)
+
+    def events_at(self, t: int) -> np.ndarray:
+        """Flat indices of the neurons spiking at step ``t``, ascending."""
+        n = t - self.start
+        if 0 <= n < len(self.planes):
+            return np.flatnonzero(self.planes[n])
+        return np.zeros(0, np.int64)
+
+    def all_events(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(flat, step)`` of every spike in the frame, ordered by step then index."""
+        n, flat = np.nonzero(self.planes)
+        return flat.astype(np.int64), (n + self.start).astype(np.int64)
+
+
+Train = LatencyTrain | RateTrain | StreamTrain
 
 #: Spike-train builders by code ``type``.
-TRAINS: dict[str, Callable[..., Train]] = {"latency": LatencyTrain.build, "rate": RateTrain.build}
+TRAINS: dict[str, Callable[..., Train]] = {"latency": LatencyTrain.build, "rate": RateTrain.build,
+                                           "stream": StreamTrain.build}
 
 
 def value_shape(network: SpikingNetwork, port: str) -> tuple[int, ...]:
@@ -139,8 +182,12 @@ def value_shape(network: SpikingNetwork, port: str) -> tuple[int, ...]:
     (3,)
     """
     enc = next(e for e in network.encoders if e.port == port)
-    dims = network.population[enc.population].dims
-    return dims[:-1] if N_PARTS[enc.split] else dims
+    pop = network.population[enc.population]
+    dims = pop.dims[:-1] if N_PARTS[enc.split] else pop.dims
+    if enc.code.type == "stream":  # the bit axis stands where the streamed axis is
+        i = pop.axes.index(BIT_AXIS)
+        dims = (*dims[:i], enc.code.length, *dims[i + 1:])
+    return dims
 
 
 def encode_inputs(

@@ -126,7 +126,9 @@ def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
     ndarray of bool
         ``(frames, *value_shape)``: True where some part is out of range.
     """
-    if code.type == "latency":
+    if code.type == "stream":
+        bad = parts > code.bound()
+    elif code.type == "latency":
         if code.t_max - code.t_min <= 1:  # a threshold: every value has its meaning
             bad = np.zeros(parts.shape, bool)
         elif code.rounding in ("floor", "dither"):  # dither: floor(t + u), u may be 0

@@ -18,8 +18,10 @@ import numpy as np
 from backends.reference.delivery import DELIVERY_BUILDERS, Delivery
 from backends.reference.gate import GateInputs, gate_inputs
 from backends.reference.neuron import StepParams
+from backends.reference.resonator import ResonatorStepParams
 from compiler.snn.network import Population, SpikingNetwork
 from compiler.snn.projections import Projection
+from compiler.snn.resonator import ResonatorParams
 from ir.errors import SimulationError
 
 __all__ = ["SimPlan", "build_plan", "closed_form_problems", "ARITHMETICS"]
@@ -136,7 +138,8 @@ def build_plan(
                                   f"known kinds: {sorted(builders)}", node=proj.id)
     if integer:
         _check_integer(network)
-    neurons = {p.id: StepParams.from_params(p.params, network.n_steps, integer, p.shape)
+    neurons = {p.id: (ResonatorStepParams.of if isinstance(p.params, ResonatorParams)
+                      else StepParams.from_params)(p.params, network.n_steps, integer, p.shape)
                for p in network.populations if not p.source}
     deliveries = {q.id: builders[q.kind](q, pops[q.source], pops[q.target], integer)
                   for q in network.projections}

@@ -38,7 +38,7 @@ import numpy as np
 from backends.reference.delivery import Delivery
 from backends.reference.neuron import NeuronState, Segment, StepParams, neuron_step
 
-__all__ = ["Arrivals", "charge", "silent", "driven"]
+__all__ = ["Arrivals", "charge", "silent", "drive", "driven"]
 
 
 @dataclass(frozen=True)
@@ -162,6 +162,23 @@ def driven(
             first[hit] = s0 + cross.argmax(axis=0)[hit]
         return cur[-1].copy(), vs[-1].copy()
     return _recur(u, v, first, seg, params, drive)
+
+
+def drive(arrivals: list, s0: int, s1: int, n_frames: int, dims: tuple[int, ...],
+          dtype) -> np.ndarray:
+    """The drive histogram of steps ``[s0, s1)``: ``(s1 − s0, frames · size)`` currents
+    (as :func:`driven` builds it, for the resonators' closed form)."""
+    n_t = s1 - s0
+    out = np.zeros((n_t * n_frames, *dims), dtype)
+    for arr in arrivals:
+        flat, arrive = arr.within(s0, s1)
+        if not flat.size:
+            continue
+        src_size = arr.delivery.src_size
+        f, i = np.divmod(flat, src_size)
+        batch = np.sort(((arrive - s0) * n_frames + f) * src_size + i)
+        out += arr.delivery.current(arr.k, batch, n_t * n_frames)
+    return out.reshape(n_t, -1)
 
 
 def _recur(

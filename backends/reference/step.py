@@ -49,6 +49,7 @@ from backends.reference.delivery import (
 from backends.reference.encoding import Train
 from backends.reference.live_neurons import LiveNeurons
 from backends.reference.plan import SimPlan
+from backends.reference.resonator import LiveResonators, ResonatorStepParams
 from backends.reference.result import Activity
 
 __all__ = ["run_step"]
@@ -100,7 +101,9 @@ def run_step(
     n_steps = plan.network.n_steps
     pops = plan.populations
     size = {pid: pops[pid].size for pid in plan.order}
-    live = {pid: LiveNeurons(plan.neurons[pid], n_frames * size[pid]) for pid in plan.neurons}
+    live = {pid: (LiveResonators if isinstance(plan.neurons[pid], ResonatorStepParams)
+                  else LiveNeurons)(plan.neurons[pid], n_frames * size[pid])
+            for pid in plan.neurons}
     empty = np.zeros(0, np.int64)
     ring = {pid: [empty] * plan.history[pid] for pid in plan.order}
     feeds = {pid: [_feed(plan, trains, ring, dl, k, d, n_frames)

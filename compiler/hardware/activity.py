@@ -37,6 +37,9 @@ def spike_bound(network: SpikingNetwork) -> dict[str, float]:
     for pop in network.populations:
         if pop.source:
             code = codes.get(pop.id)
+            if code is not None and code.type == "stream":
+                out[pop.id] = float(code.length)  # one spike per sample at most
+                continue
             out[pop.id] = 1.0 if code is None or isinstance(code, LatencyCode) else float(
                 ceil(code.max_rate * network.n_steps))
         else:

@@ -19,6 +19,7 @@ from compiler.lowering.dft_rate import register_rate
 from compiler.lowering.dft_time import register_time
 from compiler.lowering.inputs import register_io
 from compiler.lowering.registry import HOST, LoweringRegistry, LoweringRule
+from compiler.lowering.resonator import register_resonator
 from compiler.lowering.values import HostValue, SpikeValue, Value
 
 __all__ = [
@@ -43,5 +44,6 @@ def default_registry() -> LoweringRegistry:
     register_rate(registry)
     register_fft(registry)
     register_time(registry)
+    register_resonator(registry)
     register_classifier(registry)
     return registry

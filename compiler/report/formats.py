@@ -15,6 +15,9 @@ quantize pass's record (``records["quantize"]``):
 * ``charging_guard`` — a host-decoded layer's guard above the calibrated full scale: its
   ratio and the charging steps it takes from the window;
 * ``input_dither`` — an encoder whose rounding is dithered: the extra rounding noise;
+* ``resonator`` — a resonator DFT layer (:mod:`compiler.lowering.resonator`): its stream
+  bits, coefficient format and drift bound, read-out code and steps per chirp; the cost is
+  its state memory (two ``state_bits`` words per bin);
 * ``static_split`` — the part repeating over chirps computed on the host: the host
   multiply-adds per frame it adds (chirp mean, its range DFT, the rank-one Doppler product
   and the sum).
@@ -94,6 +97,17 @@ def format_rows(program) -> list[dict]:
                              "detail": f"values up to {guard['ratio']:g}x the calibrated full "
                                        "scale coded, not clipped",
                              "cost": f"{guard['steps']} of {ch['n_steps']} charging steps"})
+        for node, r in (net.meta.get("resonator") or {}).items():
+            pop = net.population.get(f"{node}/out")
+            n_res = pop.size // 4 if pop is not None else 0
+            coef = f"{r['coef_bits']}-bit" if r["coef_bits"] else "float"
+            rows.append({"node": node, "item": node, "mechanism": "resonator",
+                         "detail": f"{r['stream_bits']}-bit stream, {coef} coefficients, drift "
+                                   f"bound {r['bound']:.3g} over {r['input_steps']} steps, "
+                                   f"{r['readout']} read-out: {r['input_steps']} + "
+                                   f"{r['readout_steps']} steps per chirp",
+                         "cost": f"{n_res:,} resonators x 2 x {profile.state_bits or 32} bits "
+                                 f"= {n_res * 2 * (profile.state_bits or 32) / 8192:.1f} kB"})
         for enc in net.encoders:
             if getattr(enc.code, "rounding", None) == "dither":
                 rows.append({"node": enc.node or enc.port, "item": enc.population,

@@ -48,6 +48,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from compiler.snn.stream import StreamCode
 from ir.errors import NetworkError
 
 __all__ = [
@@ -188,7 +189,7 @@ class RateCode(_Frozen):
         return (np.floor(n_steps * r + self.phase) - np.floor(self.phase)).astype(np.int64)
 
 
-Code = LatencyCode | RateCode
+Code = LatencyCode | RateCode | StreamCode
 
 
 class Encoder(_Frozen):
@@ -201,8 +202,9 @@ class Encoder(_Frozen):
     population : str
         The source population that emits the spikes; its shape is the value
         shape plus a trailing ``part`` axis when ``split`` adds one.
-    code : LatencyCode or RateCode
-        How values become spikes.
+    code : LatencyCode, RateCode or StreamCode
+        How values become spikes (a stream code replaces its axis by a ``bit`` axis in
+        the population, :mod:`compiler.snn.stream`).
     split : {"none", "re_im", "signed", "re_im_signed"}
         How signed/complex values are spread over the ``part`` axis.
     node : str
@@ -218,7 +220,7 @@ class Encoder(_Frozen):
 
     port: str
     population: str
-    code: LatencyCode | RateCode = Field(discriminator="type")
+    code: LatencyCode | RateCode | StreamCode = Field(discriminator="type")
     split: Split = "none"
     node: str = ""
     normalize_axes: tuple[str, ...] = ()

@@ -35,6 +35,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from compiler.snn.coding import N_PARTS, Decoder, Encoder
 from compiler.snn.neurons import NeuronParams
 from compiler.snn.projections import MatrixProjection, Projection, StencilProjection
+from compiler.snn.resonator import N_COMPARTMENTS, ResonatorParams
 from ir.errors import NetworkError
 
 __all__ = ["Population", "SpikingNetwork", "PART_AXIS"]
@@ -52,8 +53,9 @@ class Population(BaseModel):
         Unique population id.
     shape : dict of str to int
         Named axes and their sizes, in memory order.
-    params : NeuronParams
-        Dynamics of every neuron (ignored for sources).
+    params : NeuronParams or ResonatorParams
+        Dynamics of every neuron (ignored for sources); resonators
+        (:mod:`compiler.snn.resonator`) keep their four compartments on ``part``.
     source : bool
         True for a spike source driven by an :class:`Encoder` (no dynamics).
     origin : dict
@@ -64,7 +66,7 @@ class Population(BaseModel):
 
     id: str = Field(min_length=1)
     shape: dict[str, int]
-    params: NeuronParams = NeuronParams()
+    params: ResonatorParams | NeuronParams = NeuronParams()
     source: bool = False
     origin: dict[str, str] = Field(default_factory=dict)
 
@@ -219,6 +221,13 @@ class SpikingNetwork:
                     f"population {p.id!r}: {len(par.scales)} per-neuron scales along "
                     f"{par.scale_axis!r}, but its shape is {dict(p.shape)}; give one scale per "
                     "index of an axis of the population", node=p.id)
+            if isinstance(par, ResonatorParams) and (
+                    p.axes[-1:] != (PART_AXIS,) or p.shape[PART_AXIS] != N_COMPARTMENTS
+                    or p.shape.get(par.axis) != par.n_bins):
+                raise NetworkError(
+                    f"population {p.id!r}: a resonator population needs a trailing "
+                    f"{PART_AXIS!r} axis of {N_COMPARTMENTS} and axis {par.axis!r} of "
+                    f"{par.n_bins} (its coefficients); its shape is {dict(p.shape)}", node=p.id)
         fed = {e.population for e in self.encoders}
         for p in self.populations:
             if p.source and p.id not in fed:

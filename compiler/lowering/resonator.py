@@ -1,0 +1,303 @@
+r"""The ``resonator`` motif for ``dft``: one resonate-and-fire neuron per bin, fed sample by sample.
+
+Streaming spectral analysis after Reeb et al. (spiking neural resonators for FMCW radar,
+2025).  The ``N`` samples along the DFT axis enter one per step through a stream code
+(:mod:`compiler.snn.stream`: bit-plane spikes, window folded into the per-sample level),
+and every bin ``k`` is one resonator (:mod:`compiler.snn.resonator`) whose 2-D state
+turns by ``θ_k = 2π f_k/N`` per step:
+
+.. math:: z_k(N) = \sum_{n=0}^{N-1} x[n]\, a_k^{N-n} = \sum_n x[n]\, e^{-2πi f_k n/N} = X_k
+          \qquad (a_k = e^{iθ_k},\ \text{option } \texttt{resonator\_decay}\ ρ:\ a_k = ρe^{iθ_k})
+
+Each sample reaches each bin through one synapse per bit and part — ``B·P·K``
+synapses per stream (``P = 2`` real, 4 complex) instead of the ``P·N × 4K`` matrix
+of the S-FT.
+
+**Output code.**  After the ``N`` input steps the state is held and read out in the
+time-linear code of the S-FT (option ``resonator_readout='time'``): the four
+compartments ``±Re, ±Im`` charge with bias ``b`` for ``T`` steps (option
+``time_steps``) and fire once at ``t = E − p/b`` (``E = N + T``), so magnitude, CFAR and
+S-FT motifs read the spikes as they read an S-FT layer's; each part is within ``b/2``
+of the exact value; a value read on the host charges each bin at its own calibrated
+scale.  ``'graded'`` sends the held state as one payload per compartment (one step, host
+read-out only).  ``'auto'`` (default) is ``graded`` on targets with graded spikes where
+the value goes to the host, else ``time``; ``docs/fourier.md`` compares both codes.
+
+**Fixed point** (targets with ``weight_bits``): the rotation coefficients have
+``resonator_coef_bits`` fraction bits (default 12, Loihi's decay format), chosen by
+:func:`~compiler.lowering.resonator_fixed.fixed_coefficients` (``|a| ≤ 1``, least
+drift); the state is scaled to about ``2^{state_bits − 2}`` at the calibrated full scale.
+The coefficient bits are the fewest (≥ 12) whose drift bound meets
+``resonator_drift_max`` (default 0.01); the bound is recorded (``meta["resonator"]``), a
+layer over it is refused, and a host read-out divides each bin's known gain ``|g_k|``
+out in its decoder (the magnitude drift; the phase drift stays, bounded).
+
+Examples
+--------
+>>> from compiler.lowering import LoweringRegistry
+>>> from ir.ops import DFT
+>>> reg = LoweringRegistry()
+>>> register_resonator(reg)
+>>> reg.motifs(DFT)
+['host', 'resonator']
+"""
+
+from __future__ import annotations
+
+from math import prod
+
+import numpy as np
+
+from compiler.hardware.formats import bias_value
+from compiler.lowering.context import LoweringContext
+from compiler.lowering.dft_common import dft_axes
+from compiler.lowering.dft_time import TimeCode, _steps, calibration_of, headroom_of
+from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.resonator_fixed import (
+    bin_angles,
+    bin_gains,
+    drift_report,
+    fixed_coefficients,
+    float_coefficients,
+)
+from compiler.lowering.time_inputs import TimeInputOptions, encoder_headroom
+from compiler.lowering.values import Value
+from compiler.snn import N_PARTS, PART_AXIS, Decoder, Encoder, Phase
+from compiler.snn.resonator import ResonatorParams
+from compiler.snn.stream import BIT_AXIS, StreamCode
+from ir.errors import CompileError
+from ir.ops import DFT, Op
+from radar.dsp import dft_matrix
+from radar.windows import window_coefficients
+
+__all__ = ["MOTIF", "lower_resonator", "register_resonator"]
+
+MOTIF = "resonator"
+#: Bits of the stream code per input part when ``stream_bits`` is not given.
+DEFAULT_STREAM_BITS = 12
+#: Default ``resonator_drift_max``: the largest drift bound a layer may have.
+DRIFT_MAX = 0.01
+_COMPARTMENT = {"signed": (0, 1), "re_im_signed": (0, 1, 2, 3)}
+
+
+def _bits(ctx: LoweringContext, node: str, ratio: float) -> tuple[int, int]:
+    """``(B, s)``: stream bits and level weight ``2^s`` (integer targets: the full-scale
+    state ``ratio·2^(B+s)`` within ``2^(state_bits−2)``; the bits in groups of ``w − 1``,
+    one projection each, so every weight ``2^(b+s)`` is one mantissa ``≤ 2^(w−2)`` under
+    its projection's exponent: no split synapses)."""
+    w_bits = getattr(ctx.target, "weight_bits", None)
+    given = ctx.option("stream_bits")
+    if not w_bits:
+        bits = int(given or DEFAULT_STREAM_BITS)
+        if not 1 <= bits <= 30:
+            raise CompileError(f"node {node!r}: stream_bits={bits} is outside 1..30", node=node)
+        return bits, 0
+    e_max = int(getattr(ctx.target, "weight_exponent_max", 0) or 0)
+    room = int(np.floor(np.log2(_state_top(ctx) / max(ratio, 1e-30))))
+    top = min(w_bits - 1 + e_max, room)
+    bits = int(given or min(max(DEFAULT_STREAM_BITS, room), top))  # fill the state
+    if not 1 <= bits <= top:
+        raise CompileError(f"node {node!r}: stream_bits={bits} is outside 1..{top} (weights "
+                           f"2^b of {w_bits}-bit mantissas and exponents <= {e_max} reach "
+                           f"2^{w_bits - 2 + e_max}; the {ctx.target.state_bits}-bit state "
+                           f"holds {room} bits at this gain)", node=node)
+    groups = -(-bits // (w_bits - 1))
+    return bits, int(np.clip(room - bits, 0, e_max - (groups - 1) * (w_bits - 1)))
+
+
+def _state_top(ctx: LoweringContext) -> float:
+    return 2.0 ** ((getattr(ctx.target, "state_bits", None) or 24) - 2)
+
+
+def _frequencies(node: str, op: DFT, n: int) -> tuple[np.ndarray, int]:
+    """DFT frequency ``f_k`` (whole, in bins of ``M``) of every output row, and ``M``.
+
+    Zero padding (``n_fft = M > N``) is streaming ``M − N`` zeros: the resonators keep
+    turning for ``M`` steps, so ``z = Σ_n x[n] a^{M−n}`` is the padded DFT.
+    """
+    m = op.n_fft or n
+    if m < n:
+        raise CompileError(f"node {node!r}: n_fft={m} is below the {n} samples the resonators "
+                           "stream; give n_fft >= the axis size or motif 'time'", node=node)
+    row = dft_matrix(max(n, 2), n_fft=max(m, 2), keep=op.keep, shift=op.shift)[:, 1]
+    return np.rint(np.angle(np.conj(row)) * max(m, 2) / (2 * np.pi)), m
+
+
+def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> Value:
+    """Rule of motif ``resonator`` for ``dft`` nodes (see the module docstring)."""
+    if not isinstance(op, DFT):
+        raise CompileError(f"node {node!r}: motif 'resonator' lowers 'dft' nodes only, not "
+                           f"{op.op!r}", node=node)
+    (x,) = inputs
+    host = ctx.to_host(x)
+    in_type = host.type
+    axes = dft_axes(node, op, in_type)
+    n, t_out = axes.n_in, _steps(ctx)
+    split_in = "re_im_signed" if in_type.complex else "signed"
+    p_in = N_PARTS[split_in]
+    rec_in = calibration_of(ctx, host.node, node)
+    setting = TimeInputOptions.of(ctx).encoder_headroom
+    x_max = rec_in.max_part * headroom_of(ctx) * encoder_headroom(rec_in, setting) or 1.0
+    rec = calibration_of(ctx, node, node)
+    full = rec.max_part * headroom_of(ctx) or 1.0  # largest output part (value units)
+    bits, shift = _bits(ctx, node, full / x_max)
+    window = window_coefficients(op.window, n) if op.window else np.ones(n)
+    names = list(in_type.axes)
+    i_axis = names.index(axes.axis)
+    inner = prod(in_type.axes[a] for a in names[i_axis + 1:]) * p_in
+    code = StreamCode(axis=axes.axis, length=n, inner=inner, bits=bits, x_max=x_max,
+                      gains=tuple(float(w) for w in window))
+    builder = ctx.builder()
+    if builder.has_encoder(host.node):
+        raise CompileError(f"node {node!r}: value {host.node!r} is already encoded in this "
+                           "network by another consumer; give it one motif", node=node)
+    src_shape = {(BIT_AXIS if a == axes.axis else a): (bits if a == axes.axis else size)
+                 for a, size in in_type.axes.items()}
+    src = builder.population(node, "in", {**src_shape, PART_AXIS: p_in}, motif=MOTIF,
+                             source=True)
+    builder.encoder(Encoder(port=host.node, population=src.id, split=split_in, node=host.node,
+                            code=code))
+    freqs, m = _frequencies(node, op, n)  # m input steps (n samples, then zeros)
+    theta = bin_angles(freqs, m)
+    rho = float(ctx.option("resonator_decay", 1.0))
+    if not 0.0 < rho <= 1.0:
+        raise CompileError(f"node {node!r}: resonator_decay={rho} is outside (0, 1]", node=node)
+    integer = bool(getattr(ctx.target, "weight_bits", None))
+    if integer:
+        unit = code.step_of_level / 2 ** shift  # value of one state unit
+        c, s, f_bits = _coefficients(ctx, theta, rho, m, full / unit)
+        w_level = 2.0 ** shift
+    else:
+        unit, f_bits, w_level = 1.0, 0, code.step_of_level
+        c, s = float_coefficients(theta, rho)
+    b, scales = _readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
+    drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit)
+    limit = float(ctx.option("resonator_drift_max", DRIFT_MAX))
+    if drift["bound"] > limit:
+        why = (f"with {f_bits}-bit coefficients; raise resonator_coef_bits"
+               if drift["truncation"] <= limit else
+               f"by the state's rounding ({drift['truncation']:.4f} of the full-scale state "
+               f"{full / unit:.0f}); raise resonator_drift_max or calibrate on data")
+        raise CompileError(f"node {node!r}: resonator drift bound {drift['bound']:.4f} over "
+                           f"N={m} steps exceeds resonator_drift_max={limit} {why}", node=node)
+    readout = _readout(ctx, node)
+    graded = readout == "graded"
+    v_th = b * t_out + b / 2
+    phases = (Phase(start_step=0, spiking_on=False),
+              Phase(start_step=m, bias=0.0 if graded else b, input_on=False,
+                    spiking_on=not graded),
+              Phase(start_step=m + (1 if graded else t_out), input_on=False, spiking_on=False))
+    per_bin = {} if graded or scales is None else {"scale_axis": axes.out_axis,
+                                                   "scales": tuple(scales)}
+    params = ResonatorParams(axis=axes.out_axis, cos=tuple(c), sin=tuple(s), coef_bits=f_bits,
+                             v_th=v_th if not graded else 1.0, phases=phases, **per_bin)
+    out_type = ctx.types[node]
+    pop = builder.population(node, "out", axes.out_shape(out_type, "re_im_signed"), params,
+                             motif=MOTIF)
+    w_bits = getattr(ctx.target, "weight_bits", None)
+    _connect(builder, node, src.id, pop.id, bits, split_in, axes.out_axis, len(freqs), w_level,
+             group=(w_bits - 1) if w_bits else bits)
+    builder.meta.setdefault("resonator", {})[node] = {
+        **drift, "stream_bits": bits, "readout": readout, "readout_steps": 1 if graded else t_out,
+        "input_steps": m, "unit": unit, "bias": b, "v_th": v_th}
+    # host read-outs divide out each bin's known fixed-point gain |g_k| (magnitude drift)
+    g_mag = np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits)) if f_bits else None
+    if graded:
+        comp = {"gain_axis": axes.out_axis, "gains": tuple(g_mag)} if f_bits else {}
+        dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit / 2,
+                      combine="re_im_signed", node=node, **comp)
+        return ctx.spike_value(node, pop, dec, (m, m + 1), kind="graded", end=m + 1,
+                               split="re_im_signed")
+    gained = ({"gain_axis": axes.out_axis,
+               "gains": tuple((g_mag if f_bits else 1.0) / scales)} if per_bin else {})
+    dec = Decoder(port=node, population=pop.id, kind="spike_time", scale=unit * b,
+                  t_ref=float(m + t_out), missing=0.0, combine="re_im_signed", node=node,
+                  **gained)
+    tc = TimeCode(end=m + t_out, scale=unit * b, split="re_im_signed", **gained)
+    return ctx.spike_value(node, pop, dec, (m, m + t_out), **tc.as_code())
+
+
+def _host_read(ctx: LoweringContext, node: str) -> bool:
+    """Whether every consumer takes the value on the host (a resonator re-streams it)."""
+    return all(ctx.motif_for(c) in ("host", MOTIF) for c in ctx.graph.consumers_of(node))
+
+
+def _readout(ctx: LoweringContext, node: str) -> str:
+    """Option ``resonator_readout``: ``auto`` is ``graded`` where the target has graded spikes
+    and the value goes to the host, else ``time``."""
+    readout = str(ctx.option("resonator_readout", "auto"))
+    if readout not in ("auto", "time", "graded"):
+        raise CompileError(f"node {node!r}: resonator_readout={readout!r} is not 'auto', "
+                           "'time' or 'graded'", node=node)
+    host = _host_read(ctx, node)
+    if readout == "graded" and not host:
+        raise CompileError(f"node {node!r}: resonator_readout='graded' sends the state to the "
+                           "host; a spiking consumer needs 'time'", node=node)
+    if readout == "auto":
+        return "graded" if host and getattr(ctx.target, "graded_spike_bits", None) else "time"
+    return readout
+
+
+def _coefficients(ctx: LoweringContext, theta: np.ndarray, rho: float, n: int,
+                  full_state: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """Fixed-point coefficients: option ``resonator_coef_bits``, else the fewest bits in
+    12 … 24 whose drift bound meets ``resonator_drift_max``."""
+    given = ctx.option("resonator_coef_bits")
+    limit = float(ctx.option("resonator_drift_max", DRIFT_MAX))
+    for f_bits in ([int(given)] if given is not None else range(12, 25)):
+        c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
+        bound = drift_report(c, s, theta, n_steps=n, rho=rho, bits=f_bits,
+                             full_state=full_state)["bound"]
+        if bound <= limit:
+            break
+    return c, s, f_bits
+
+
+def _readout_scales(ctx: LoweringContext, node: str, rec, axis: str, full_state: float,
+                    t_out: int, integer: bool) -> tuple[float, np.ndarray | None]:
+    """Base bias ``b`` and per-bin scales ``c_k`` of the time read-out (None: one scale).
+
+    Where every consumer is on the host, bin ``k`` charges with ``c_k·b`` so that its own
+    calibrated maximum spans the window (the DC bin of real captures is far above the
+    rest); spiking consumers read one shared scale.
+    """
+    per_index = rec.axis_max.get(axis)
+    host_only = _host_read(ctx, node)
+    if not (host_only and per_index) or (integer and not ctx.target.per_neuron_scales):
+        return (_whole_bias(ctx, full_state / t_out) if integer else full_state / t_out), None
+    part_max = np.asarray(per_index, np.float64) * headroom_of(ctx)
+    level = np.maximum(part_max / max(rec.max_part * headroom_of(ctx), 1e-300), 1e-6)
+    if integer:  # base bias 2, whole scales: bin k charges by 2·c_k
+        c = np.maximum(1.0, np.ceil(level * full_state / (2.0 * t_out)))
+        return 2.0, c
+    return full_state / t_out, level
+
+
+def _whole_bias(ctx: LoweringContext, b: float) -> float:
+    """An even whole bias the target can hold, at most ``b`` (at least 2)."""
+    t = ctx.target
+    b = max(2.0, 2.0 * np.floor(b / 2))
+    q = bias_value(b, mantissa_bits=getattr(t, "bias_mantissa_bits", None),
+                   exponent_max=getattr(t, "bias_exponent_max", 0) or 0)
+    return float(max(2.0, 2.0 * np.floor(q / 2)))
+
+
+def _connect(builder, node: str, src: str, dst: str, bits: int, split_in: str, out_axis: str,
+             n_bins: int, w_level: float, group: int) -> None:
+    """Fan-out synapses: bit ``b`` of part ``p`` → compartment of ``p`` in every bin
+    (projection ``w`` for bits ``0 … group−1``, ``w1`` for the next group, …)."""
+    p_in = N_PARTS[split_in]
+    comp = np.array(_COMPARTMENT[split_in])
+    for g, lo in enumerate(range(0, bits, group)):
+        b, p, k = (a.ravel() for a in np.meshgrid(np.arange(lo, min(bits, lo + group)),
+                                                  np.arange(p_in), np.arange(n_bins),
+                                                  indexing="ij"))
+        builder.matrix(node, f"w{g or ''}", src, dst, contract=(BIT_AXIS, PART_AXIS),
+                       produce=(out_axis, PART_AXIS), motif=MOTIF, rows=b * p_in + p,
+                       cols=k * 4 + comp[p], values=w_level * 2.0 ** b,
+                       n_in_out=(bits * p_in, n_bins * 4))
+
+
+def register_resonator(registry: LoweringRegistry) -> None:
+    """Register ``resonator`` for ``dft`` (never the default)."""
+    registry.register(DFT, MOTIF, lower_resonator)

@@ -1,0 +1,103 @@
+r"""The stream code: one sample per step, its level sent as binary bit-plane spikes.
+
+The resonators of the ``resonator`` motif take their input sample by sample.  A
+:class:`StreamCode` maps the index ``n`` of one value axis (``axis``, length ``L``) to
+the step ``start_step + n`` and sends each non-negative part value ``z`` as its level
+
+.. math:: q = \mathrm{rint}\big(\min(z, x_{max}) / x_{max} \cdot (2^B - 1)\big)
+
+in binary (after an optional per-index gain ``g_n``, e.g. a window): the source
+population has that axis replaced by a ``bit`` axis of ``B`` neurons, and neuron ``b``
+spikes at step ``start_step + n`` iff bit ``b`` of ``q`` is set.  A synapse of weight
+``2^b·w`` from neuron ``b`` then delivers ``q·w`` in that one step; the value is
+``q · x_max / (2^B − 1)``.  ``inner`` is the number of values (parts included) that
+follow the streamed axis in memory, so the train can find it.
+
+Examples
+--------
+>>> import numpy as np
+>>> code = StreamCode(axis="sample", length=3, inner=1, bits=2, x_max=3.0)
+>>> code.levels(np.array([0.0, 1.2, 9.0])).tolist()
+[0, 1, 3]
+>>> code.step_of_level
+1.0
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+__all__ = ["BIT_AXIS", "StreamCode"]
+
+#: The axis of the bit-plane neurons that replaces the streamed axis in a source population.
+BIT_AXIS = "bit"
+
+
+class StreamCode(BaseModel):
+    """Binary bit-plane stream along one value axis (see the module docstring).
+
+    Parameters
+    ----------
+    axis : str
+        The value axis streamed over time (one index per step).
+    length : int
+        Its size ``L``.
+    inner : int
+        Values (parts included) after ``axis`` in memory order.
+    bits : int
+        Bits ``B`` of the level.
+    x_max : float
+        The value of the top level ``2^B − 1``.
+    start_step : int
+        Step of index 0.
+    gains : tuple of float
+        Optional factor per index of ``axis`` applied before the level (a window the
+        sensor interface applies as it streams); empty: none.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    type: Literal["stream"] = "stream"
+    axis: str
+    length: int = Field(ge=1)
+    inner: int = Field(ge=1)
+    bits: int = Field(ge=1, le=30)
+    x_max: float = Field(gt=0)
+    x_min: float = 0.0
+    start_step: int = Field(default=0, ge=0)
+    gains: tuple[float, ...] = ()
+
+    @property
+    def step_of_level(self) -> float:
+        """The value of one level: ``x_max / (2^B − 1)``."""
+        return self.x_max / ((1 << self.bits) - 1)
+
+    def levels(self, parts: np.ndarray) -> np.ndarray:
+        """Whole levels ``q`` of non-negative part values (clipped to ``x_max``)."""
+        z = np.clip(np.asarray(parts, np.float64), 0.0, self.x_max)
+        return np.rint(z / self.step_of_level).astype(np.int64)
+
+    def bound(self) -> float:
+        """The largest value that rounds to the top level (above it clipping changes spikes)."""
+        return self.x_max + 0.5 * self.step_of_level
+
+    def bit_planes(self, parts: np.ndarray) -> np.ndarray:
+        """Spikes as ``(L, frames · pre · B · inner)`` booleans from ``(frames, size)`` parts.
+
+        Examples
+        --------
+        >>> code = StreamCode(axis="n", length=2, inner=1, bits=2, x_max=3.0)
+        >>> code.bit_planes(np.array([[1.0, 2.0]])).astype(int).tolist()
+        [[1, 0], [0, 1]]
+        """
+        f = parts.shape[0]
+        z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
+        if self.gains:
+            z = z * np.asarray(self.gains)[None, None, :, None]
+        q = self.levels(z)
+        b = np.arange(self.bits, dtype=np.int64)
+        planes = (q[:, :, :, None, :] >> b[None, None, None, :, None]) & 1  # f, pre, L, B, in
+        return np.moveaxis(planes, 2, 0).reshape(self.length, -1).astype(bool)
