@@ -47,7 +47,7 @@ from compiler.passes.static_split import StaticSplit, StaticSplitOptions
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError
-from ir.evaluate import EvalRegistry, eval_registry
+from ir.interpreter import EvalRegistry, eval_registry
 
 __all__ = ["compile_graph", "default_pipeline"]
 
@@ -165,7 +165,7 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         Lowering rules (default :func:`compiler.lowering.default_registry`).
     evaluators : mapping of op class to implementation, optional
         Reference implementations of new ops (``impl(node_id, op, args, types) ->
-        array``), added to :data:`ir.evaluate.EVAL_REGISTRY`: calibration evaluates
+        array``), added to :data:`ir.interpreter.EVAL_REGISTRY`: calibration evaluates
         with them, and the program keeps them (``program.evaluators``) for its
         host segments, so :func:`backends.reference.run_program` runs it as is.
         Nothing global changes (docs/howto-op.md).

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 
 from ir import Graph
 from ir.errors import BudgetError, CompileError
-from ir.limits import check_limit, check_value_sizes
+from ir.limits import check_limit, check_value_sizes, human_bytes
 from ir.ops import DFT, Linear
 from ir.types import TensorType
 
@@ -189,8 +189,6 @@ def check_compile(graph: Graph, *, max_memory_bytes: int | None = MAX_MEMORY_BYT
     IRError
         If the graph's types cannot be inferred.
     """
-    from backends.reference.guards import human_bytes
-
     max_memory_bytes = check_limit("max_memory_bytes", max_memory_bytes, "bytes",
                                    where=f"chain {graph.name!r}", error=CompileError)
     max_time_s = check_limit("max_time_s", max_time_s, "s", where=f"chain {graph.name!r}",

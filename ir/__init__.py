@@ -16,7 +16,18 @@ Examples
 TensorType(axes={'range': 4}, complex=False, domain='amplitude')
 >>> evaluate(g, {"x": np.ones(8)})["out"].tolist()
 [8.0, 0.0, 0.0, 0.0]
+
+Only the errors are imported with the package; every other name is imported on first
+use (PEP 562 ``__getattr__``).  The error hierarchy is the bottom layer every package
+imports (:mod:`radar` included), so ``import ir.errors`` must not load the graph, the
+ops and the interpreter — which themselves import :mod:`radar`
+(``tests/test_layers.py``).
 """
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING
 
 from ir.errors import (
     ArtifactError,
@@ -29,37 +40,68 @@ from ir.errors import (
     RadarSNNError,
     SimulationError,
 )
-from ir.evaluate import EVAL_REGISTRY, EvalRegistry, Implementation, check_input, evaluate
-from ir.graph import Graph
-from ir.ops import (
-    CFAR,
-    DFT,
-    OP_REGISTRY,
-    AdcInput,
-    CfarWindow,
-    Classifier,
-    Input,
-    Linear,
-    Log,
-    Magnitude,
-    Op,
-    OpRegistry,
-    Output,
-    Sum,
-    Threshold,
-    Window,
-    make_registry,
-)
-from ir.schema import chain_file_model, chain_schema
-from ir.serialize import (
-    graph_from_dict,
-    graph_from_json,
-    graph_from_yaml,
-    graph_to_dict,
-    graph_to_json,
-    graph_to_yaml,
-)
-from ir.types import DOMAINS, Domain, TensorType
+
+if TYPE_CHECKING:  # what the lazy names are, for type checkers and readers
+    from ir.graph import Graph
+    from ir.interpreter import EVAL_REGISTRY, EvalRegistry, Implementation, check_input, evaluate
+    from ir.ops import (
+        CFAR,
+        DFT,
+        OP_REGISTRY,
+        AdcInput,
+        CfarWindow,
+        Classifier,
+        Input,
+        Linear,
+        Log,
+        Magnitude,
+        Op,
+        OpRegistry,
+        Output,
+        Sum,
+        Threshold,
+        Window,
+        make_registry,
+    )
+    from ir.schema import chain_file_model, chain_schema
+    from ir.serialize import (
+        graph_from_dict,
+        graph_from_json,
+        graph_from_yaml,
+        graph_to_dict,
+        graph_to_json,
+        graph_to_yaml,
+    )
+    from ir.types import DOMAINS, Domain, TensorType
+
+#: Lazy name -> the module that defines it.
+_LAZY = {
+    **dict.fromkeys(("EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input",
+                     "evaluate"), "ir.interpreter"),
+    "Graph": "ir.graph",
+    **dict.fromkeys(("CFAR", "DFT", "OP_REGISTRY", "AdcInput", "CfarWindow", "Classifier",
+                     "Input", "Linear", "Log", "Magnitude", "Op", "OpRegistry", "Output", "Sum",
+                     "Threshold", "Window", "make_registry"), "ir.ops"),
+    **dict.fromkeys(("chain_file_model", "chain_schema"), "ir.schema"),
+    **dict.fromkeys(("graph_from_dict", "graph_from_json", "graph_from_yaml", "graph_to_dict",
+                     "graph_to_json", "graph_to_yaml"), "ir.serialize"),
+    **dict.fromkeys(("DOMAINS", "Domain", "TensorType"), "ir.types"),
+}
+
+
+def __getattr__(name: str):
+    """Import a lazy name's module on first use (PEP 562) and keep the name here."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ir' has no attribute {name!r}")
+    value = getattr(import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     # errors

@@ -1,7 +1,7 @@
 """A leading frames axis on a chain's inputs: how many frames, one frame, and the stack.
 
 A chain declares one frame (``adc: {rx: 4, chirp: 64, sample: 256}``); a recording
-holds many.  Every entry point that runs a chain — :func:`ir.evaluate.evaluate`,
+holds many.  Every entry point that runs a chain — :func:`ir.interpreter.evaluate`,
 :func:`backends.reference.run_program`, ``radarsnn run`` — accepts inputs with one
 extra *leading* axis of frames, as :func:`backends.reference.simulate` does for a
 network: all inputs must then carry it, with the same length.  Each frame is run

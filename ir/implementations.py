@@ -4,9 +4,8 @@ An implementation gets the node id, the op, the input arrays and the input types
 and returns the node's array; arrays keep the axis order of their
 :class:`~ir.types.TensorType`. The maths is delegated to :mod:`radar.dsp` and
 :mod:`radar.cfar`, the golden references the spiking lowerings are checked
-against. (They are imported inside the implementations: :mod:`radar` imports
-:mod:`ir.errors`, which loads this package, so a top-level import here would be
-circular.) :mod:`ir.evaluate` runs a graph with them.
+against (the domain is the layer below the IR: :mod:`radar` imports only
+:mod:`ir.errors`). :mod:`ir.interpreter` runs a graph with them.
 
 Examples
 --------
@@ -40,6 +39,11 @@ from ir.ops import (
     Window,
 )
 from ir.types import TensorType
+from radar.cfar import cfar
+from radar.clustering import cluster_detections
+from radar.dsp import dft, magnitude, to_db
+from radar.tracking import track_sequence
+from radar.windows import apply_window
 
 __all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation"]
 
@@ -51,14 +55,11 @@ EvalRegistry = Mapping[type[Op], Implementation]
 
 
 def _window(node_id: str, op: Window, args: list, types: list) -> np.ndarray:
-    from radar.windows import apply_window
 
     return apply_window(args[0], op.kind, axis=types[0].index(op.axis))
 
 
 def _dft(node_id: str, op: DFT, args: list, types: list) -> np.ndarray:
-    from radar.dsp import dft
-    from radar.windows import apply_window
 
     ax = types[0].index(op.axis)
     x = args[0] if op.window is None else apply_window(args[0], op.window, axis=ax)
@@ -78,13 +79,11 @@ def _sum(node_id: str, op: Sum, args: list, types: list) -> np.ndarray:
 
 
 def _magnitude(node_id: str, op: Magnitude, args: list, types: list) -> np.ndarray:
-    from radar.dsp import magnitude
 
     return magnitude(args[0], op.kind)
 
 
 def _log(node_id: str, op: Log, args: list, types: list) -> np.ndarray:
-    from radar.dsp import to_db
 
     return to_db(args[0], domain=types[0].domain, floor_db=op.floor_db)
 
@@ -94,7 +93,6 @@ def _add(node_id: str, op: Add, args: list, types: list) -> np.ndarray:
 
 
 def _cfar(node_id: str, op: CFAR, args: list, types: list) -> np.ndarray:
-    from radar.cfar import cfar
 
     win = op.window(node_id, types[0])
     src = [types[0].index(a) for a in win.axes]
@@ -121,7 +119,6 @@ def _output(node_id: str, op: Output, args: list, types: list) -> np.ndarray:
 
 
 def _cluster(node_id: str, op: Cluster, args: list, types: list) -> np.ndarray:
-    from radar.clustering import cluster_detections
 
     maps = [types[0].index(a) for a in op.axes]
     moved = [np.moveaxis(np.asarray(a), maps, [-2, -1]) for a in args]
@@ -133,7 +130,6 @@ def _cluster(node_id: str, op: Cluster, args: list, types: list) -> np.ndarray:
 
 
 def _track(node_id: str, op: Track, args: list, types: list) -> np.ndarray:
-    from radar.tracking import track_sequence
 
     return track_sequence(args[0], **op.tracker_params())
 

@@ -10,7 +10,7 @@ inside it.
 :func:`check_value_sizes` adds up what the values of some nodes take
 (:attr:`~ir.types.TensorType.nbytes`) and refuses over a limit, naming the largest node; a
 value no array can hold (more than ``sys.maxsize`` bytes) is refused whatever the limit.
-:func:`~ir.evaluate.evaluate`, :func:`~compiler.calibration.synthetic_inputs`,
+:func:`~ir.interpreter.evaluate`, :func:`~compiler.calibration.synthetic_inputs`,
 ``run_program`` and the compile guard call it.
 """
 
@@ -29,9 +29,9 @@ from ir.types import TensorType
 if TYPE_CHECKING:
     from ir.graph import Graph
 
-__all__ = ["MAX_VALUE_BYTES", "check_limit", "check_value_sizes"]
+__all__ = ["MAX_VALUE_BYTES", "check_limit", "check_value_sizes", "human_bytes"]
 
-#: Default limit on the values :func:`ir.evaluate.evaluate` holds (it keeps every node's
+#: Default limit on the values :func:`ir.interpreter.evaluate` holds (it keeps every node's
 #: value): 8 GiB, like the compile and simulation guards.
 MAX_VALUE_BYTES = 8 << 30
 
@@ -137,3 +137,17 @@ of bytes, or None (no limit)
         return int(value) if unit == "bytes" else float(value)
     raise error(f"{where}: {name}={short_repr(value)} must be a positive finite number of "
                 f"{unit}, or None (no limit)")
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as a short decimal figure.
+
+    Examples
+    --------
+    >>> human_bytes(512), human_bytes(3.2e9), human_bytes(8 << 30)
+    ('512 B', '3.2 GB', '8.59 GB')
+    """
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{int(n)} B"

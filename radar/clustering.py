@@ -56,13 +56,12 @@ from __future__ import annotations
 import numpy as np
 
 from ir.errors import RadarConfigError
-from ir.ops.host import CLUSTER_FEATURES
 
 __all__ = ["FEATURES", "N_FEATURES", "cluster_detections", "cluster_table", "label_detections"]
 
-FEATURES: tuple[str, ...] = CLUSTER_FEATURES
+FEATURES: tuple[str, ...] = ("valid", "range_bin", "doppler_bin", "n_cells", "peak_power")
 """Columns of a cluster table: 1/0, centroid bins (fractional), cells, peak cell's power
-(the IR's :data:`ir.ops.host.CLUSTER_FEATURES`)."""
+(the IR's :data:`ir.ops.host.CLUSTER_FEATURES` is this tuple: the domain owns the layout)."""
 
 N_FEATURES = len(FEATURES)
 

@@ -70,14 +70,14 @@ from __future__ import annotations
 import numpy as np
 
 from ir.errors import RadarConfigError
-from ir.ops.host import TRACK_STATE
 from radar.clustering import N_FEATURES
 
 __all__ = ["STATE", "N_STATE", "Tracker", "track_sequence"]
 
-STATE: tuple[str, ...] = TRACK_STATE
+STATE: tuple[str, ...] = ("valid", "id", "confirmed", "range_m", "velocity_mps", "hits",
+                          "misses")
 """Columns of a track table (ranges in m, velocities in m/s, counts in frames; the IR's
-:data:`ir.ops.host.TRACK_STATE`)."""
+:data:`ir.ops.host.TRACK_STATE` is this tuple: the domain owns the layout)."""
 
 N_STATE = len(STATE)
 

@@ -21,7 +21,7 @@ from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError, RadarSNNError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from radar.cfar import cfar, noise_estimate
 
 #: Maps per hypothesis example (four exactness tests x examples x this >= 1 000 maps).

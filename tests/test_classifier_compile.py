@@ -15,7 +15,7 @@ from compiler.compile import compile_graph
 from compiler.report.classifier import classifier_row
 from ir import Graph
 from ir.errors import CompileError, IRError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from ir.ops.classify import (
     LIF,
     Classifier,

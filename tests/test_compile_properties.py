@@ -11,7 +11,7 @@ from backends.reference import run_program
 from compiler.compile import compile_graph
 from ir import Graph
 from ir.errors import RadarSNNError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -18,7 +18,7 @@ from compiler.lowering.dft_fft import (
 )
 from ir import Graph
 from ir.errors import CompileError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from ir.ops import DFT
 from radar.loaders import load_ti_chirps
 

@@ -18,7 +18,7 @@ from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frame
 

@@ -91,7 +91,7 @@ def test_imported_op_type_checks_in_a_graph(imported) -> None:
 def test_import_compile_simulate(tmp_path) -> None:
     from backends.reference import run_program
     from compiler.compile import compile_graph
-    from ir.evaluate import evaluate
+    from ir.interpreter import evaluate
 
     # spikes from one reference level (a real-valued first layer has no spiking form)
     nir.write(tmp_path / "snn.nir", _snn_graph())
@@ -126,7 +126,7 @@ def test_errors_name_the_nir_node(tmp_path) -> None:
 def test_imported_classifier_is_allocated_on_loihi2(tmp_path) -> None:
     from backends.reference import run_program
     from compiler.compile import compile_graph
-    from ir.evaluate import evaluate
+    from ir.interpreter import evaluate
 
     nir.write(tmp_path / "snn.nir", _snn_graph())
     op = import_classifier(tmp_path / "snn.nir", tmp_path / "snn.npz", time_axis="frame",

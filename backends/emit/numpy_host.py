@@ -2,7 +2,7 @@ r"""Numpy code of the host segments: one ``compute(x)`` per IR node, constants f
 
 Each op type has one emitter in the explicit registry :data:`HOST_EMITTERS`
 (op class → ``emitter(pkg, module, node_id, op, in_type) -> body``); the code
-repeats what :data:`ir.evaluate.EVAL_REGISTRY` computes (``radar.dsp``,
+repeats what :data:`ir.interpreter.EVAL_REGISTRY` computes (``radar.dsp``,
 ``radar.windows``, ``radar.cfar``) with every parameter resolved at emit time:
 window taps, DFT bins, linear matrices and the CFAR window geometry (training
 mask, per-cell training counts and effective ``k``) are stored in

@@ -45,8 +45,8 @@ import numpy as np
 from backends.reference.program import run_program
 from compiler.program import CompiledProgram
 from ir.errors import RadarSNNError
-from ir.evaluate import evaluate
 from ir.frames import n_frames
+from ir.interpreter import evaluate
 
 __all__ = ["VALUE_RTOL", "AccuracyCheck", "NodeAccuracy", "check_accuracy"]
 

@@ -67,7 +67,7 @@ from backends.reference.closed_cost import (
 )
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
-from ir.limits import check_limit
+from ir.limits import check_limit, human_bytes  # human_bytes: also exported here
 
 __all__ = ["MAX_MEMORY_BYTES", "MAX_TIME_S", "NEURON_UPDATES_PER_S", "STEP_OVERHEAD_S",
            "SYNAPSE_OPS_PER_S", "SimEstimate", "check_limit", "check_simulation",
@@ -117,20 +117,6 @@ class SimEstimate:
     def memory_bytes(self) -> int:
         """Estimated peak memory: fixed + frames × per frame."""
         return self.fixed_bytes + self.n_frames * self.per_frame_bytes
-
-
-def human_bytes(n: float) -> str:
-    """``n`` bytes as a short decimal figure.
-
-    Examples
-    --------
-    >>> human_bytes(512), human_bytes(3.2e9), human_bytes(8 << 30)
-    ('512 B', '3.2 GB', '8.59 GB')
-    """
-    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if n >= scale:
-            return f"{n / scale:.3g} {unit}"
-    return f"{int(n)} B"
 
 
 def _nnz(proj) -> int:

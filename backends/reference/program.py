@@ -3,7 +3,7 @@
 Values flow between segments by radar-IR node id: a spiking segment's encoder
 ports read values, its decoder ports produce them; a host segment evaluates
 its node with the reference interpreter's implementation (the conventional
-numpy meaning, :data:`ir.evaluate.EVAL_REGISTRY`, plus the implementations of
+numpy meaning, :data:`ir.interpreter.EVAL_REGISTRY`, plus the implementations of
 new ops the program was compiled with, ``program.evaluators``).
 
 Examples
@@ -34,8 +34,8 @@ from backends.reference.simulate import simulate
 from backends.reference.units import apply_units, normalize_inputs, normalized_inputs, unit_plan
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.evaluate import check_input, eval_registry, evaluate_node
 from ir.frames import frame, n_frames, stack_frames
+from ir.interpreter import check_input, eval_registry, evaluate_node
 from ir.limits import check_limit, check_value_sizes
 from ir.model import short_repr
 
@@ -246,8 +246,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
 
     Notes
     -----
-    A host segment evaluates its node with :func:`ir.evaluate.evaluate_node`, looking
-    the op up in :data:`ir.evaluate.EVAL_REGISTRY` plus the evaluators the program
+    A host segment evaluates its node with :func:`ir.interpreter.evaluate_node`, looking
+    the op up in :data:`ir.interpreter.EVAL_REGISTRY` plus the evaluators the program
     was compiled with (``compile_graph(..., evaluators=)``, kept in
     ``program.evaluators``); a host node whose op has none raises
     :class:`~ir.errors.IRError` naming the node and the fix.

@@ -64,7 +64,7 @@ class CompileContext:
     lowering : object, optional
         The lowering registry (``compiler.lowering.LoweringRegistry``) to use.
     evaluators : mapping of op class to implementation
-        Reference implementations added to :data:`ir.evaluate.EVAL_REGISTRY` (new ops,
+        Reference implementations added to :data:`ir.interpreter.EVAL_REGISTRY` (new ops,
         ``impl(node_id, op, args, types) -> array``): what ``calibrate`` evaluates with
         and what the program's host segments run (:func:`run_pipeline` records them).
     progress : callable

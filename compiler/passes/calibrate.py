@@ -20,7 +20,7 @@ Policies (compile option ``calibration``, the pass's field ``policy``):
 Measured records also hold per-axis profiles (``axis_max``, ``axis_quantiles``,
 see :mod:`compiler.calibration`): what per-bin stage gains are set from.
 
-Calibration inputs are evaluated with :func:`ir.evaluate.evaluate` and the
+Calibration inputs are evaluated with :func:`ir.interpreter.evaluate` and the
 context's evaluators (``CompileContext.evaluators``), so a chain holding an op of
 the user's own is measured like any other.  Bound propagation (no calibration
 inputs): one rule per op type in :mod:`compiler.calibration_bounds` (``window`` keeps
@@ -65,7 +65,7 @@ from compiler.program import CompiledProgram
 from compiler.snn.coding import normalize_values
 from ir import Graph
 from ir.errors import CompileError
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from ir.ops import DFT, AdcInput, Linear, Sum, Window
 
 __all__ = ["Calibrate", "CalibrationWarning", "adc_full_scales", "mixed_axes"]

@@ -1,7 +1,7 @@
 r"""The ``fuse-linear`` pass: fold windows and diagonal scalings into the next linear map.
 
 Rewrites, applied until none matches (every rewrite keeps the graph's value
-exactly up to rounding, checked against :func:`ir.evaluate.evaluate` in the tests):
+exactly up to rounding, checked against :func:`ir.interpreter.evaluate` in the tests):
 
 1. ``window(kind) → dft`` on the same axis, the DFT without a window: the DFT
    takes the window (its ``window`` field, :math:`X_k = \sum_n w_n x_n e^{…}`) and

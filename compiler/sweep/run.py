@@ -116,7 +116,7 @@ def plan_cells(spec: SweepSpec, registry: MetricRegistry | None = None) -> list[
     metric or input that the chain cannot give.
     """
     from ir import Graph
-    from ir.evaluate import check_input
+    from ir.interpreter import check_input
 
     registry = registry or default_metrics()
     source = _source_identity(spec)

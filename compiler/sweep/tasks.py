@@ -90,7 +90,7 @@ def compile_point(graph: dict, compile_args: dict[str, Any], input_node: str,
     """
     from compiler.compile import compile_graph
     from ir import Graph
-    from ir.evaluate import check_input
+    from ir.interpreter import check_input
 
     args = dict(compile_args)
     target = args.pop("target", None)

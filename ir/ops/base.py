@@ -4,7 +4,7 @@ An op is a frozen record of parameters with a literal ``op`` field (its name in
 chain files) and a pure :meth:`Op.infer` that maps input types to the output
 type, raising :class:`~ir.errors.IRError` that names the node, the op and what
 is wrong. Ops carry no evaluation code: the reference semantics live in
-:mod:`ir.evaluate`, registered per op type.
+:mod:`ir.interpreter`, registered per op type.
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ from pydantic import Field, FiniteFloat, NonNegativeInt, PositiveInt, model_vali
 from ir.model import Name
 from ir.ops.base import Op
 from ir.types import TensorType
+from radar import cfar_theory
 
 __all__ = ["CFAR", "CfarWindow", "EdgeMode", "Threshold"]
 
@@ -189,8 +190,6 @@ class CFAR(Op):
         """
         if self.alpha is not None:
             return self.alpha
-        from radar import cfar_theory
-
         if self.kind == "ca":
             return float(cfar_theory.ca_alpha(self.pfa, n_train))
         return float(cfar_theory.os_alpha(self.pfa, n_train, self.k))

@@ -27,16 +27,16 @@ from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt
 from ir.model import Name
 from ir.ops.base import Op
 from ir.types import TensorType
+from radar.clustering import FEATURES
+from radar.tracking import STATE
 
 __all__ = ["CLUSTER_FEATURES", "TRACK_STATE", "Cluster", "Track"]
 
-CLUSTER_FEATURES: tuple[str, ...] = ("valid", "range_bin", "doppler_bin", "n_cells",
-                                     "peak_power")
-"""Columns of a cluster table (``feature`` axis)."""
+CLUSTER_FEATURES: tuple[str, ...] = FEATURES
+"""Columns of a cluster table (``feature`` axis), as the domain defines them."""
 
-TRACK_STATE: tuple[str, ...] = ("valid", "id", "confirmed", "range_m", "velocity_mps", "hits",
-                                "misses")
-"""Columns of a track table (``state`` axis)."""
+TRACK_STATE: tuple[str, ...] = STATE
+"""Columns of a track table (``state`` axis), as the domain defines them."""
 
 
 class Cluster(Op):

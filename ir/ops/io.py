@@ -31,7 +31,7 @@ class AdcInput(Op):
     Notes
     -----
     Output type: ``TensorType(axes=shape, complex=complex, domain="amplitude")``.
-    Takes no inputs; its value is supplied to :func:`ir.evaluate.evaluate`.
+    Takes no inputs; its value is supplied to :func:`ir.interpreter.evaluate`.
 
     Examples
     --------

@@ -25,7 +25,7 @@ from test_ir_properties import chains
 
 from compiler.guards import estimate_compile
 from ir import Graph
-from ir.evaluate import evaluate
+from ir.interpreter import evaluate
 from ir.ops import OP_REGISTRY
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,0 +1,108 @@
+"""Imports go one way through the layers (issue 20, item 4), checked by walking every module.
+
+Bottom to top:
+
+0. ``ir.errors`` — the error hierarchy; imports nothing first-party;
+1. ``radar`` — the domain (FMCW configuration, scenes, conventional DSP); imports only
+   the errors;
+2. ``ir`` — the graph IR and its reference interpreter (built on the domain's DSP);
+3. the compile path — ``compiler`` (passes, lowering, hardware, report …), nothing of
+   ``backends``;
+4. ``backends`` — the simulator, artifacts, exporters, emission;
+5. the applications — ``compiler.cli``, ``compiler.demo``, ``compiler.bench``,
+   ``compiler.sweep``, ``backends.emit.command``, ``radarsnn``: anything below.
+
+A module may import its own layer and those below; function-level imports count too
+(a lazy import is still a dependency).  :data:`EXCEPTIONS` lists each remaining upward
+import with the reason it is there.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("ir", "radar", "compiler", "backends", "radarsnn")
+APPLICATIONS = ("compiler.cli", "compiler.demo", "compiler.bench", "compiler.sweep",
+                "backends.emit.command", "radarsnn")
+
+#: (importer, imported) -> why the upward import stays.
+EXCEPTIONS = {
+    ("ir.implementations", "compiler.classifier"):
+        "the classifier op's golden meaning is its LIF network, built from compiler.snn "
+        "neuron parameters; moving that forward pass below ir is issue 20's remaining step",
+}
+
+
+def layer(module: str) -> int:
+    """The layer of a first-party module (see the module docstring)."""
+    if module == "ir.errors":
+        return 0
+    if any(module == a or module.startswith(a + ".") for a in APPLICATIONS):
+        return 5
+    top = module.split(".")[0]
+    return {"radar": 1, "ir": 2, "compiler": 3, "backends": 4}[top]
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imports() -> list[tuple[str, str, int]]:
+    """``(importer, imported, line)`` of every first-party import outside ``TYPE_CHECKING``."""
+    found = []
+    for pkg in PACKAGES:
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            typing_only = {id(n) for block in ast.walk(tree) if isinstance(block, ast.If)
+                           and "TYPE_CHECKING" in ast.unparse(block.test)
+                           for n in ast.walk(block)}
+            for node in ast.walk(tree):
+                if id(node) in typing_only:
+                    continue
+                if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                    names = [node.module]
+                elif isinstance(node, ast.Import):
+                    names = [a.name for a in node.names]
+                else:
+                    continue
+                found += [(_module_name(path), n, node.lineno) for n in names
+                          if n.split(".")[0] in PACKAGES]
+    return found
+
+
+def test_the_walk_sees_the_imports():
+    edges = {(a, b) for a, b, _ in imports()}
+    assert ("compiler.compile", "compiler.passes") in edges  # a plain top-level import
+    assert ("ir.implementations", "compiler.classifier") in edges  # a function-level one
+    assert len(edges) > 300
+
+
+@pytest.mark.parametrize("edge", sorted(EXCEPTIONS))
+def test_every_exception_is_still_needed(edge):
+    assert edge in {(a, b) for a, b, _ in imports()}, f"{edge} is gone: drop it from EXCEPTIONS"
+
+
+def test_imports_only_go_down_the_layers():
+    upward = [f"{a} (line {line}) imports {b}: layer {layer(a)} -> {layer(b)}"
+              for a, b, line in imports()
+              if layer(b) > layer(a) and (a, b.rsplit(".", 1)[0]) not in EXCEPTIONS
+              and (a, b) not in EXCEPTIONS]
+    assert not upward, "\n".join(upward)
+
+
+def test_the_errors_and_the_domain_import_no_ir():
+    """``import ir.errors`` (what radar does) must not load the IR: radar is below it."""
+    import subprocess
+    import sys
+
+    code = ("import sys, radar, radar.cfar, radar.clustering, radar.tracking; "
+            "print(sorted(m for m in sys.modules if m.startswith(('ir.', 'compiler', "
+            "'backends'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT).stdout.strip()
+    assert out == "['ir.errors']", out
