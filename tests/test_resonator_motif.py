@@ -73,10 +73,10 @@ def test_complex_input_window_and_shift():
 
 def test_fixed_point_engines_agree_and_drift_is_bounded():
     x = _signal()
-    p = _compile("loihi2", x=x)
+    p = _compile("loihi2", x=x, resonator_coef_bits=16)  # the user's claim of wider products
     net = p.networks[0]
     drift = net.meta["resonator"]["f"]
-    assert drift["coef_bits"] >= 12 and drift["bound"] <= 0.01
+    assert drift["coef_bits"] == 16 and drift["bound"] <= 0.01
     a = simulate(net, {"x": x}, mode="step", arithmetic="int64")
     b = simulate(net, {"x": x}, mode="closed", arithmetic="float64")
     np.testing.assert_array_equal(a.first_spike_steps["f/out"], b.first_spike_steps["f/out"])
@@ -85,7 +85,18 @@ def test_fixed_point_engines_agree_and_drift_is_bounded():
 def test_too_few_coefficient_bits_is_refused_naming_the_bound():
     with pytest.raises(CompileError, match=r"node 'f': resonator drift bound .* exceeds "
                                            r"resonator_drift_max=0.01 with 8-bit"):
-        _compile("loihi2", resonator_coef_bits=8)
+        _compile("loihi2", resonator_coef_bits=8, resonator_drift_max=0.01)
+
+
+def test_the_chip_format_is_kept_and_a_large_drift_reported():
+    """Default: Lava's 12-bit RF coefficients, never widened; a bound over 0.01 is reported."""
+    from compiler.lowering.resonator import ResonatorDriftWarning
+
+    with pytest.warns(ResonatorDriftWarning, match=r"node 'f': resonator drift bound 0\.\d+ "
+                                                  r"over N=\d+ steps with the chip's 12-bit"):
+        p = _compile("loihi2", graph=_graph(keep="positive", n_fft=1024), x=_signal())
+    drift = p.networks[0].meta["resonator"]["f"]
+    assert drift["coef_bits"] == 12 and drift["bound"] > 0.01
 
 
 def test_zero_padding_streams_zeros():

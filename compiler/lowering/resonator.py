@@ -24,13 +24,18 @@ read-out only).  ``'auto'`` (default) is ``graded`` on targets with graded spike
 the value goes to the host, else ``time``; ``docs/fourier.md`` compares both codes.
 
 **Fixed point** (targets with ``weight_bits``): the rotation coefficients have
-``resonator_coef_bits`` fraction bits (default 12, Loihi's decay format), chosen by
+:data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS` = 12 fraction bits — the
+format of Lava's bit-accurate resonate-and-fire model (``sin_decay``/``cos_decay``,
+12 bits, shift 12), the only published one — chosen by
 :func:`~compiler.lowering.resonator_fixed.fixed_coefficients` (``|a| ≤ 1``, least
 drift); the state is scaled to about ``2^{state_bits − 2}`` at the calibrated full scale.
-The coefficient bits are the fewest (≥ 12) whose drift bound meets
-``resonator_drift_max`` (default 0.01); the bound is recorded (``meta["resonator"]``), a
-layer over it is refused, and a host read-out divides each bin's known gain ``|g_k|``
-out in its decoder (the magnitude drift; the phase drift stays, bounded).
+The drift bound is recorded (``meta["resonator"]``); above
+:data:`DRIFT_MAX` it is reported with a :class:`ResonatorDriftWarning` naming the bound
+and the ways out — the compiler never widens the chip's format by itself: wider
+coefficients (option ``resonator_coef_bits``, e.g. 16) are the user's claim about the
+chip.  Given ``resonator_drift_max``, a layer over it is refused.  A host read-out divides
+each bin's known gain ``|g_k|`` out in its decoder (the magnitude drift; the phase drift
+stays, bounded).
 
 Examples
 --------
@@ -44,6 +49,7 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from math import prod
 
 import numpy as np
@@ -54,6 +60,7 @@ from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.dft_time import TimeCode, _steps, calibration_of, headroom_of
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.resonator_fixed import (
+    CHIP_COEF_BITS,
     bin_angles,
     bin_gains,
     drift_report,
@@ -75,8 +82,12 @@ __all__ = ["MOTIF", "lower_resonator", "register_resonator"]
 MOTIF = "resonator"
 #: Bits of the stream code per input part when ``stream_bits`` is not given.
 DEFAULT_STREAM_BITS = 12
-#: Default ``resonator_drift_max``: the largest drift bound a layer may have.
+#: The drift bound above which a layer is reported (refused above ``resonator_drift_max``).
 DRIFT_MAX = 0.01
+
+
+class ResonatorDriftWarning(UserWarning):
+    """A resonator layer's fixed-point drift bound is above :data:`DRIFT_MAX` (reported)."""
 _COMPARTMENT = {"signed": (0, 1), "re_im_signed": (0, 1, 2, 3)}
 
 
@@ -172,8 +183,18 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
         c, s = float_coefficients(theta, rho)
     b, scales = _readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
     drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit)
-    limit = float(ctx.option("resonator_drift_max", DRIFT_MAX))
-    if drift["bound"] > limit:
+    given = ctx.option("resonator_drift_max")
+    limit = DRIFT_MAX if given is None else float(given)
+    if drift["bound"] > limit and given is None:
+        warnings.warn(
+            f"node {node!r}: resonator drift bound {drift['bound']:.4f} over N={m} steps with "
+            f"the chip's {f_bits}-bit rotation coefficients (gain drift "
+            f"{drift['gain_drift']:.4f}, divided out on a host read-out; phase drift "
+            f"{drift['phase_drift_rad']:.4f} rad); fewer samples per DFT, or "
+            "resonator_coef_bits=16 if the chip's neurons multiply wider (an assumption: "
+            "Lava's resonate-and-fire format is 12 bits), or the S-FT (motif time)",
+            ResonatorDriftWarning, stacklevel=2)
+    elif drift["bound"] > limit:
         why = (f"with {f_bits}-bit coefficients; raise resonator_coef_bits"
                if drift["truncation"] <= limit else
                f"by the state's rounding ({drift['truncation']:.4f} of the full-scale state "
@@ -240,16 +261,11 @@ def _readout(ctx: LoweringContext, node: str) -> str:
 
 def _coefficients(ctx: LoweringContext, theta: np.ndarray, rho: float, n: int,
                   full_state: float) -> tuple[np.ndarray, np.ndarray, int]:
-    """Fixed-point coefficients: option ``resonator_coef_bits``, else the fewest bits in
-    12 … 24 whose drift bound meets ``resonator_drift_max``."""
+    """Fixed-point coefficients: option ``resonator_coef_bits``, else the chip's format
+    (:data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS`), never widened here."""
     given = ctx.option("resonator_coef_bits")
-    limit = float(ctx.option("resonator_drift_max", DRIFT_MAX))
-    for f_bits in ([int(given)] if given is not None else range(12, 25)):
-        c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
-        bound = drift_report(c, s, theta, n_steps=n, rho=rho, bits=f_bits,
-                             full_state=full_state)["bound"]
-        if bound <= limit:
-            break
+    f_bits = CHIP_COEF_BITS if given is None else int(given)
+    c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
     return c, s, f_bits
 
 

@@ -10,8 +10,9 @@ and the error changes the response of bin ``k`` to its own frequency by the fact
 (``N`` input steps; ``|1 − g_k|`` is the relative *drift* of the bin, magnitude and
 phase: ``≈ N|â e^{−iθ} − 1|/2``).  :func:`fixed_coefficients` picks, among the lattice
 points within 3 units of ``2^F ρ e^{iθ}``, the one with the least drift subject to
-``|â| ≤ ρ`` — the state can never grow, however long the stream — and the lowering takes
-the fewest fraction bits ``F ≥ 12`` whose drift bound meets ``resonator_drift_max``.  The
+``|â| ≤ ρ`` — the state can never grow, however long the stream — at the chip's
+:data:`CHIP_COEF_BITS` (or the bits the user gives), and the lowering reports a bound
+above ``0.01`` (``compiler.lowering.resonator``).  The
 rounding of each rotation adds at most half a unit per component and step, so after ``N``
 steps a state differs from the exact product by at most ``N/√2`` units
 (:func:`drift_report` states both bounds).
@@ -28,8 +29,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bin_angles", "float_coefficients", "fixed_coefficients", "bin_gains",
-           "drift_report"]
+__all__ = ["CHIP_COEF_BITS", "bin_angles", "float_coefficients", "fixed_coefficients",
+           "bin_gains", "drift_report"]
+
+#: Fraction bits of a chip's rotation coefficients: Lava's bit-accurate resonate-and-fire
+#: model (``lava.proc.rf``, the fixed-point model also used for Loihi 2) holds ``sin_decay``
+#: and ``cos_decay`` as 12-bit integers applied with a right shift of 12 — the only
+#: published format; wider coefficients are the user's assumption (``resonator_coef_bits``).
+CHIP_COEF_BITS = 12
 
 _REACH = 3
 
