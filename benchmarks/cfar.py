@@ -24,6 +24,7 @@ import time
 
 import numpy as np
 
+from compiler.compile import lower_pass
 from compiler.sweep.frames import random_scene  # the sweep's scene model, shared
 from ir import Graph
 
@@ -74,13 +75,12 @@ def _networks(kind, domain, cal, steps):
     from compiler.passes import Verify
     from compiler.passes.base import CompileContext, run_pipeline
     from compiler.passes.calibrate import Calibrate
-    from compiler.passes.lower import Lower
     from compiler.program import CompiledProgram
 
     g = study_graph(kind, domain)
     for n in steps:
-        ctx = CompileContext(options={"time_steps": n}, calibration_inputs={"rd": cal})
-        yield n, run_pipeline([Verify(), Calibrate(), Lower()], ctx,
+        ctx = CompileContext(calibration_inputs={"rd": cal})
+        yield n, run_pipeline([Verify(), Calibrate(), lower_pass({"time_steps": n})], ctx,
                               CompiledProgram(graph=g)).networks[0]
 
 

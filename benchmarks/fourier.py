@@ -22,13 +22,12 @@ import numpy as np
 
 from backends.reference import run_program
 from compiler.chains import range_doppler_chain
+from compiler.compile import calibrate_pass, lower_pass
 from compiler.lowering import default_registry
 from compiler.lowering.dft_common import sft_rmse
 from compiler.lowering.magnitude import amb, l1
 from compiler.passes import CompileContext, Verify, run_pipeline
-from compiler.passes.calibrate import Calibrate
 from compiler.passes.fuse_linear import FuseLinear
-from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from ir import Graph, evaluate
 from radar.config import preset
@@ -41,8 +40,8 @@ STEPS = (32, 64, 128, 256, 512)
 
 
 def _compile(graph: Graph, calib: dict, **options) -> CompiledProgram:
-    ctx = CompileContext(options=options, calibration_inputs=calib, lowering=default_registry())
-    return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
+    ctx = CompileContext(calibration_inputs=calib, lowering=default_registry())
+    return run_pipeline([Verify(), FuseLinear(), calibrate_pass(options), lower_pass(options)], ctx,
                         CompiledProgram(graph=graph))
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from compiler.guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
-from compiler.lowering.time_inputs import TimeInputOptions
+from compiler.lowering.options import MOTIF_OPTION_MODELS, motif_settings
 from compiler.option_checks import check_options
 from compiler.passes import CompileContext, Pass, Verify, run_pipeline
 from compiler.passes.base import Progress
@@ -49,21 +49,13 @@ from ir import Graph
 from ir.errors import CompileError, IRError
 from ir.interpreter import EvalRegistry, eval_registry
 
-__all__ = ["compile_graph", "default_pipeline"]
+__all__ = ["calibrate_pass", "compile_graph", "default_pipeline", "lower_pass"]
 
 
 #: Options ``compile_graph`` accepts in ``options=`` besides its named arguments.
 EXTRA_OPTIONS = {
     "headroom": "calibration headroom factor >= 1 (static policy)",
     "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
-    "charging": "S-FT charging schedule: auto | constant | companding",
-    "stage_gains": "time-coded S-FT: per-bin gains between linear stages, auto | none",
-    "fft_radices": "radix sequence of the time-fft motif",
-    "input_range": "assumed max |input| of rate/fft motifs without calibration",
-    "cfar_range": "{cfar node id: (lo, hi)} value range of the CFAR latency code",
-    "cfar_quantiles": "(lo, hi) quantiles of the calibration map that bound the CFAR code, or "
-                      "{node id or kind: (lo, hi)}",
-    "cfar_ties": "how the CFAR code resolves equal spike steps",
     "long_delays": "quantize: 'relay' (default) or 'error' for delays beyond the target's maximum",
     "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
     "frame_rate_hz": "report: frames per second (default from the chain or 10)",
@@ -71,15 +63,48 @@ EXTRA_OPTIONS = {
     "n_angle_bins": "report: angle bins of the RA map (default 256)",
     "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
     "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
-    "stream_bits": "resonator: bits of the bit-plane stream code of each input part",
-    "resonator_readout": "resonator: output code, auto | time (time-linear ± parts) | graded",
-    "resonator_coef_bits": "resonator: fraction bits of fixed-point rotation coefficients",
-    "resonator_decay": "resonator: decay rho in (0, 1] per step (1: none, the plain DFT)",
-    "resonator_drift_max": "resonator: refuse a layer whose drift bound exceeds this (0.01)",
-    # typed fields of their pass or motif (the description says what the value must be)
+    # typed fields of their pass or motif (the description says what the value must be);
+    # time_steps, weight_bits and calibration are compile_graph's named arguments
     **{n: f"{f.description} — {(m.__doc__ or '').splitlines()[0]}"
-       for m in (StaticSplitOptions, TimeInputOptions) for n, f in m.model_fields.items()},
+       for m in (StaticSplitOptions, *MOTIF_OPTION_MODELS) for n, f in m.model_fields.items()
+       if n not in ("time_steps", "weight_bits", "calibration", "headroom")},
 }
+
+
+def calibrate_pass(options: Mapping[str, Any]) -> Calibrate:
+    """The ``calibrate`` pass with its fields from compile options (absent: the defaults).
+
+    Examples
+    --------
+    >>> calibrate_pass({"calibration": "per-input", "headroom": 1.5}).policy
+    'per-input'
+    """
+    opts = {k: v for k, v in options.items() if v is not None}
+    return Calibrate(policy=str(opts.get("calibration", "static")),
+                     headroom=float(opts.get("headroom", 1.0)),
+                     input_bounds=tuple((str(k), float(v))
+                                        for k, v in dict(opts.get("input_bounds", {})).items()),
+                     max_memory_bytes=limits_from_options(opts)[0])
+
+
+def lower_pass(options: Mapping[str, Any]) -> Lower:
+    """The ``lower`` pass with the user's motifs and every motif's typed options.
+
+    Raises
+    ------
+    CompileError
+        A motif option its field refuses (:func:`compiler.lowering.options.motif_settings`).
+
+    Examples
+    --------
+    >>> from compiler.lowering.options import CfarOptions
+    >>> p = lower_pass({"motifs": {"dft": "rate"}, "time_steps": 64})
+    >>> p.motifs, next(s for s in p.settings if isinstance(s, CfarOptions)).time_steps
+    ((('dft', 'rate'),), 64)
+    """
+    opts = {k: v for k, v in options.items() if v is not None}
+    return Lower(motifs=tuple(sorted(dict(opts.get("motifs", {})).items())),
+                 settings=tuple(motif_settings(opts).values()))
 
 
 def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
@@ -116,12 +141,7 @@ def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> l
         Verify(), FuseLinear(),
         StaticSplit(mode=split.static_split,
                     motifs=tuple(sorted(dict(opts.get("motifs", {})).items()))),
-        Calibrate(policy=str(opts.get("calibration", "static")),
-                  headroom=float(opts.get("headroom", 1.0)),
-                  input_bounds=tuple((str(k), float(v))
-                                     for k, v in dict(opts.get("input_bounds", {})).items()),
-                  max_memory_bytes=limits_from_options(opts)[0]),
-        Lower()]
+        calibrate_pass(opts), lower_pass(opts)]
     if hardware:
         mode = str(opts.get("repetitions", "auto"))
         passes += [Quantize(long_delays=opts.get("long_delays", "relay")),
@@ -210,7 +230,7 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
     profile = None if target is None else load_profile(target)
     options = {**dict(options or {}), "motifs": dict(motifs or {}), "calibration": calibration,
                "time_steps": time_steps, "weight_bits": weight_bits}
-    ctx = CompileContext(target=profile, options=options,
+    ctx = CompileContext(target=profile,
                          calibration_inputs=dict(calibration_inputs or {}),
                          lowering=registry or default_registry(),
                          evaluators=dict(evaluators or {}))

@@ -26,7 +26,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from compiler.lowering.time_inputs import TimeInputOptions
+from compiler.lowering.options import MOTIF_OPTION_MODELS
 from compiler.passes.static_split import StaticSplitOptions
 from ir.errors import CompileError
 from ir.model import short_repr
@@ -90,17 +90,13 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
     "input_bounds": (lambda v: isinstance(v, Mapping) and all(
         isinstance(k, str) and _real(x) and x > 0 for k, x in v.items()),
         "a mapping of input node id to a finite number > 0"),
-    "charging": (lambda v: isinstance(v, str), "a schedule name (auto, constant, companding)"),
-    "stage_gains": (lambda v: isinstance(v, str), "auto or none"),
     "fft_radices": (lambda v: isinstance(v, list | tuple) and len(v) >= 1 and all(
         _int(r) and 2 <= r <= 1 << 16 for r in v), "a list of integer radices >= 2"),
-    "input_range": (lambda v: _real(v) and v > 0, "a finite number > 0"),
     "cfar_range": (_per_node(_pair),
                    "a pair (lo, hi) of finite numbers, or a mapping of node id to one"),
     "cfar_quantiles": (_per_node(_quantiles),
                        "a pair (lo, hi) of quantiles, 0 <= lo <= hi <= 1, or a mapping of node "
                        "id or CFAR kind to one"),
-    "cfar_ties": (lambda v: isinstance(v, str), "a tie rule name"),
     "long_delays": (_one_of("relay", "error"), "relay or error"),
     "repetitions": (_one_of("auto", "spatial", "temporal"), "auto, spatial or temporal"),
     "frame_rate_hz": (lambda v: _real(v) and v > 0, "a finite number > 0"),
@@ -113,8 +109,11 @@ OPTION_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
         isinstance(k, str) and isinstance(x, str) for k, x in v.items()),
         "a mapping of node id or op name to a motif name"),
     **typed_checks(StaticSplitOptions),
-    **typed_checks(TimeInputOptions),
 }
+# the motifs' typed fields (compiler.lowering.options); the rules above stay where they are
+# stricter than pydantic's (no bool or float for an int, ordered quantiles)
+OPTION_CHECKS = {**{n: c for m in MOTIF_OPTION_MODELS for n, c in typed_checks(m).items()},
+                 **OPTION_CHECKS}
 
 
 def check_options(options: Mapping[str, Any] | None, **named: Any) -> dict[str, Any]:

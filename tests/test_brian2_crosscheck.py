@@ -27,11 +27,11 @@ b2 = pytest.importorskip("brian2", reason="Brian2 is the optional extra 'brian2'
 
 from backends.brian2 import simulate_brian2  # noqa: E402
 from backends.reference import simulate  # noqa: E402
+from compiler.compile import lower_pass  # noqa: E402
 from compiler.lowering import default_registry  # noqa: E402
 from compiler.passes import CompileContext, Verify, run_pipeline  # noqa: E402
 from compiler.passes.calibrate import Calibrate  # noqa: E402
 from compiler.passes.fuse_linear import FuseLinear  # noqa: E402
-from compiler.passes.lower import Lower  # noqa: E402
 from compiler.program import CompiledProgram  # noqa: E402
 from compiler.snn import (  # noqa: E402
     Decoder,
@@ -48,9 +48,8 @@ from ir import Graph  # noqa: E402
 
 
 def _lower(graph: Graph, calibration: dict, **options) -> SpikingNetwork:
-    ctx = CompileContext(options=options, calibration_inputs=calibration,
-                         lowering=default_registry())
-    program = run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
+    ctx = CompileContext(calibration_inputs=calibration, lowering=default_registry())
+    program = run_pipeline([Verify(), FuseLinear(), Calibrate(), lower_pass(options)], ctx,
                            CompiledProgram(graph=graph))
     (net,) = program.networks
     return net

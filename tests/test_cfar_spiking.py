@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from backends.reference import run_program, simulate
 from backends.reference.continuous import simulate_continuous
 from compiler.calibration import measure
-from compiler.compile import compile_graph
+from compiler.compile import compile_graph, lower_pass
 from compiler.lowering.cfar import cfar_counters, cfar_op_counts
 from compiler.lowering.cfar_codes import ca_linear_code, os_log_code
 from compiler.passes import Verify
@@ -37,7 +37,7 @@ def _graph(shape: dict, cfar_params: dict, domain: str = "power") -> Graph:
 
 
 def _lower(g: Graph, **options) -> CompiledProgram:
-    return run_pipeline([Verify(), Lower()], CompileContext(options=options),
+    return run_pipeline([Verify(), lower_pass(options)], CompileContext(),
                         CompiledProgram(graph=g))
 
 
@@ -224,7 +224,7 @@ def test_step_accuracy_on_db_maps(study_maps, kind, need, quantiles):
     program = CompiledProgram(graph=study_graph(kind, "db"))
     program.records["calibrate"] = {"rd": measure("rd", cal)}  # what Calibrate records for rd
     options = {"time_steps": 100, **({"cfar_quantiles": quantiles} if quantiles else {})}
-    net = run_pipeline([Verify(), Lower()], CompileContext(options=options), program).networks[0]
+    net = run_pipeline([Verify(), lower_pass(options)], CompileContext(), program).networks[0]
     assert net.n_steps == 100
     # calibrated on other maps (and the 99 % top on purpose): the code clips what is above
     spiking = simulate(net, {"rd": test}, mode="step", out_of_range="clip").outputs["det"] > 0

@@ -31,9 +31,9 @@ def _graph(n: int, reps: int = 1, **dft) -> Graph:
 
 
 def _lower(g: Graph, steps: int, calibration: dict | None = None, **options):
-    ctx = LoweringContext(graph=g, registry=default_registry(),
-                          options={"motifs": {"dft": "time-fft"}, "time_steps": steps, **options},
-                          calibration=calibration or {})
+    ctx = LoweringContext.from_options(g, default_registry(), {
+        "motifs": {"dft": "time-fft"}, "time_steps": steps, **options},
+        calibration=calibration or {})
     return lower_graph(ctx)[0].network
 
 

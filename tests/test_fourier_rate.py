@@ -9,12 +9,12 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from backends.reference import simulate
+from compiler.compile import lower_pass
 from compiler.lowering import LoweringContext, default_registry, lower_graph
 from compiler.lowering.dft_common import modulus_rmse, real_weights
 from compiler.lowering.dft_rate import worst_case_bound
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
-from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError
@@ -31,8 +31,8 @@ def _graph(n: int, reps: int = 1) -> Graph:
 
 
 def _lower(g: Graph, steps: int, **options):
-    ctx = LoweringContext(graph=g, registry=default_registry(),
-                          options={"motifs": {"dft": "rate"}, "time_steps": steps, **options})
+    ctx = LoweringContext.from_options(g, default_registry(), {
+        "motifs": {"dft": "rate"}, "time_steps": steps, **options})
     return lower_graph(ctx)
 
 
@@ -108,9 +108,9 @@ def test_seed003_rmse_reduced_size(seed003_small, two_d, limit):
     g = Graph.from_dict({"name": "s", "nodes": [*nodes, {"id": "o", "op": "output",
                                                          "input": out}]})
     x = seed003_small
-    ctx = CompileContext(options={"motifs": {"dft": "rate"}, "time_steps": 250},
-                         calibration_inputs={"adc": x})
-    program = run_pipeline([Verify(), Calibrate(), Lower()], ctx, CompiledProgram(graph=g))
+    ctx = CompileContext(calibration_inputs={"adc": x})
+    lower = lower_pass({"motifs": {"dft": "rate"}, "time_steps": 250})
+    program = run_pipeline([Verify(), Calibrate(), lower], ctx, CompiledProgram(graph=g))
     (net,) = program.networks
     y = simulate(net, {"adc": x}).outputs[out]
     rmse = modulus_rmse(y, evaluate(g, {"adc": x})[out])

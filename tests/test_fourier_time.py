@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from backends.reference import run_program, simulate
 from compiler.chains import range_doppler_chain
+from compiler.compile import calibrate_pass, lower_pass
 from compiler.lowering import default_registry
 from compiler.lowering.dft_common import real_weights, sft_rmse
 from compiler.passes import CompileContext, Verify, run_pipeline
@@ -33,12 +34,10 @@ from radar.scene import SCENE_PRESETS, simulate_frame
 def compile_time(graph: Graph, calib: dict, **options) -> CompiledProgram:
     """verify → fuse-linear → calibrate → lower, as the default pipeline will run them."""
     # the bounds below are the code's on the calibrated range: no encoder headroom above it
-    ctx = CompileContext(options={"time_steps": 256, "encoder_headroom": 1, **options},
-                         calibration_inputs=calib,
-                         lowering=default_registry())
-    calibrate = Calibrate(policy=options.get("calibration", "static"))  # the pass's own field
-    return run_pipeline([Verify(), FuseLinear(), calibrate, Lower()], ctx,
-                        CompiledProgram(graph=graph))
+    options = {"time_steps": 256, "encoder_headroom": 1, **options}
+    ctx = CompileContext(calibration_inputs=calib, lowering=default_registry())
+    return run_pipeline([Verify(), FuseLinear(), calibrate_pass(options), lower_pass(options)],
+                        ctx, CompiledProgram(graph=graph))
 
 
 def dft_graph(shape: dict, *, keep: str = "all", complex_in: bool = False, **dft) -> Graph:
@@ -143,7 +142,7 @@ def test_weight_bits_quantizes_to_integers() -> None:
 
 
 def test_uncalibrated_time_motif_names_the_fix() -> None:
-    ctx = CompileContext(options={}, lowering=default_registry())
+    ctx = CompileContext(lowering=default_registry())
     with pytest.raises(CompileError, match="node 'f'.*calibration_inputs"):
         run_pipeline([Verify(), Calibrate(), Lower()], ctx,
                      CompiledProgram(graph=dft_graph({"sample": 8})))

@@ -8,12 +8,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from backends.reference import run_program, simulate
+from compiler.compile import lower_pass
 from compiler.lowering import default_registry
 from compiler.lowering.magnitude import ALPHA, BETA, amb, l1
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
 from compiler.passes.fuse_linear import FuseLinear
-from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from ir import Graph, evaluate
 from ir.errors import CompileError
@@ -23,10 +23,10 @@ _finite = st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=False)
 
 
 def compile_mag(graph: Graph, x: np.ndarray, motif: str, **options) -> CompiledProgram:
-    ctx = CompileContext(options={"time_steps": 128, "motifs": {"mag": motif},
-                                  "encoder_headroom": 1, **options},  # hand-worked spike steps
-                         calibration_inputs={"x": x}, lowering=default_registry())
-    return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
+    options = {"time_steps": 128, "motifs": {"mag": motif}, "encoder_headroom": 1,
+               **options}  # hand-worked spike steps
+    ctx = CompileContext(calibration_inputs={"x": x}, lowering=default_registry())
+    return run_pipeline([Verify(), FuseLinear(), Calibrate(), lower_pass(options)], ctx,
                         CompiledProgram(graph=graph))
 
 

@@ -20,6 +20,7 @@ from backends.reference.decoding import check_decoders
 from compiler import compile_graph
 from compiler.calibration import measure
 from compiler.chains import range_doppler_chain
+from compiler.compile import lower_pass
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.lowering import default_registry
 from compiler.lowering.dft_common import real_weights
@@ -27,7 +28,6 @@ from compiler.lowering.stage_gains import exact_weight_bits, index_levels
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
 from compiler.passes.fuse_linear import FuseLinear
-from compiler.passes.lower import Lower
 from compiler.program import CompiledProgram
 from compiler.snn import Decoder, Population, SpikingNetwork, combine_parts, split_values
 from ir import Graph, evaluate
@@ -51,10 +51,9 @@ def rd_graph(n_chirps: int = N_CHIRPS, n_samples: int = N_SAMPLES) -> Graph:
 
 def compile_rd(graph: Graph, calib: np.ndarray, **options) -> CompiledProgram:
     # the hand-worked levels below use the calibrated input range (no encoder headroom)
-    ctx = CompileContext(options={"time_steps": 32, "charging": "constant",
-                                  "encoder_headroom": 1, **options},
-                         calibration_inputs={"x": calib}, lowering=default_registry())
-    return run_pipeline([Verify(), FuseLinear(), Calibrate(), Lower()], ctx,
+    options = {"time_steps": 32, "charging": "constant", "encoder_headroom": 1, **options}
+    ctx = CompileContext(calibration_inputs={"x": calib}, lowering=default_registry())
+    return run_pipeline([Verify(), FuseLinear(), Calibrate(), lower_pass(options)], ctx,
                         CompiledProgram(graph=graph))
 
 
@@ -203,7 +202,7 @@ def test_option_none_narrow_weights_and_bad_value() -> None:
     rng = next(p for p in neurons.populations if p.id == "rng/out")
     assert rng.params.scale_axis == "range" and max(rng.params.scales) > 1
     assert neurons.decoders[0].gain_axis == "range"
-    with pytest.raises(CompileError, match="stage_gains='always' is not a mode"):
+    with pytest.raises(CompileError, match="compile option stage_gains='always' must be auto, "):
         compile_rd(g, cal, stage_gains="always")
 
 

@@ -23,7 +23,7 @@ from radar.scene import SCENE_PRESETS, simulate_frame
 
 
 def _split(graph: Graph, **options) -> CompiledProgram:
-    ctx = CompileContext(options=options)
+    ctx = CompileContext()
     split = StaticSplit(mode=options.get("static_split", "auto"),
                         motifs=tuple(sorted(options.get("motifs", {}).items())))
     return split.apply(ctx, FuseLinear().apply(ctx, CompiledProgram(graph=graph)))

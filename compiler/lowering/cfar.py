@@ -50,7 +50,7 @@ Examples
 ...      "k": 3, "alpha": 2.0},
 ...     {"id": "o", "op": "output", "input": "det"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_cfar(reg)
->>> ctx = LoweringContext(graph=g, registry=reg, options={"cfar_range": (0.1, 10.0)})
+>>> ctx = LoweringContext.from_options(g, reg, {"cfar_range": (0.1, 10.0)})
 >>> net = lower_graph(ctx)[0].network
 >>> net.n_neurons, net.n_synapse_instances(), net.meta["cfar"]["det"]["code"]["kind"]
 (16, 80, 'log')
@@ -69,6 +69,7 @@ from compiler.lowering.cfar_codes import (
     os_log_code,
 )
 from compiler.lowering.context import LoweringContext
+from compiler.lowering.options import CfarOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import Value
 from compiler.snn import Decoder, NeuronParams, Phase, SpikingNetwork
@@ -83,7 +84,7 @@ __all__ = ["MOTIF", "DEFAULT_STEPS", "register_cfar", "lower_cfar", "cfar_counte
 MOTIF = "time"
 
 #: Total time steps of a CFAR network when the compile option ``time_steps`` is not set.
-DEFAULT_STEPS = 100
+DEFAULT_STEPS = CfarOptions().time_steps  # declared in compiler.lowering.options
 
 #: ``v > 0`` as a threshold: the smallest positive normal float64 (``2**-1022``).
 _POSITIVE = float(np.finfo(np.float64).tiny)
@@ -92,7 +93,7 @@ _POSITIVE = float(np.finfo(np.float64).tiny)
 def _range(ctx: LoweringContext, node: str, source: str,
            kind: str) -> tuple[float, float, str, bool]:
     """The code's range, where it came from, and whether its top saturates on purpose."""
-    given = ctx.option("cfar_range")
+    given = ctx.settings_of(CfarOptions).cfar_range
     if isinstance(given, dict):
         given = given.get(node)
     if given is not None:
@@ -101,7 +102,7 @@ def _range(ctx: LoweringContext, node: str, source: str,
             raise CompileError(f"node {node!r} (cfar): cfar_range={given!r} must be finite with "
                                "x_hi > max(x_lo, 0)", node=node)
         return lo, hi, "option", False
-    quantiles = ctx.option("cfar_quantiles")
+    quantiles = ctx.settings_of(CfarOptions).cfar_quantiles
     if isinstance(quantiles, dict):  # per node id or per CFAR kind
         quantiles = quantiles.get(node, quantiles.get(kind))
     quantiles = tuple(quantiles or RANGE_QUANTILES[kind])
@@ -138,14 +139,14 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
     t_in = ctx.types[value.node]
     win = op.window(node, t_in)
     alpha = op.alpha_for(win.n_train)
-    n_steps = int(ctx.option("time_steps", DEFAULT_STEPS))
+    n_steps = ctx.settings_of(CfarOptions).time_steps
     lo, hi, how, saturate = _range(ctx, node, value.node, op.kind)
     map_shape = tuple(t_in.axes[a] for a in win.axes)
     n_avail = training_counts(map_shape, guard=list(win.guard), train=list(win.train),
                               edge=list(win.edge))
     if op.kind == "os":
         code, cut_delay, train_delay, info = os_log_code(
-            lo, hi, alpha=alpha, n_steps=n_steps, ties=ctx.option("cfar_ties", "balanced"))
+            lo, hi, alpha=alpha, n_steps=n_steps, ties=ctx.settings_of(CfarOptions).cfar_ties)
         params = NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="fire_once")
         # integer targets: the membrane k_eff − B is a whole number, so k_eff itself decides
         # exactly (B <= k_eff − 1) and the quantize pass can store it without rounding

@@ -7,17 +7,22 @@ Rules ask the context for what they need instead of reaching for globals:
   decoder and closes the current spiking segment if the value lives there);
 * :meth:`LoweringContext.encode` — a source population carrying a host value
   with a given code (adds an encoder);
-* :meth:`LoweringContext.motif_for`, :meth:`LoweringContext.option`,
+* :meth:`LoweringContext.motif_for`, :meth:`LoweringContext.settings_of` (the typed
+  options of a motif, :mod:`compiler.lowering.options`),
   :attr:`LoweringContext.calibration` — the choices the user and the calibrate
   pass made.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
+
+from pydantic import BaseModel
 
 from compiler.lowering.builder import NetworkBuilder
+from compiler.lowering.options import motif_settings
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.values import HostValue, SpikeValue, Value
 from compiler.program import Segment
@@ -37,6 +42,8 @@ from ir.types import TensorType
 
 __all__ = ["LoweringContext", "lower_graph"]
 
+_Model = TypeVar("_Model", bound=BaseModel)
+
 
 @dataclass
 class _Open:
@@ -54,9 +61,11 @@ class LoweringContext:
         The (verified) graph being lowered.
     registry : LoweringRegistry
         The rules.
-    options : dict
-        Compile options (``motifs``: node id or op name → motif; ``time_steps``;
-        ``weight_bits`` …).
+    motifs : mapping of str to str
+        The user's motif choices: node id or op name → motif.
+    settings : mapping of model class to model
+        The motifs' typed options (:func:`compiler.lowering.options.motif_settings`); a
+        model not given takes its defaults.
     calibration : dict
         Per-node calibration data from the calibrate pass (node id → record).
     target : object, optional
@@ -72,7 +81,8 @@ class LoweringContext:
 
     graph: Graph
     registry: LoweringRegistry
-    options: dict[str, Any] = field(default_factory=dict)
+    motifs: Mapping[str, str] = field(default_factory=dict)
+    settings: Mapping[type[BaseModel], BaseModel] = field(default_factory=dict)
     calibration: dict[str, Any] = field(default_factory=dict)
     target: Any = None
     moving: frozenset[str] = frozenset()
@@ -84,11 +94,35 @@ class LoweringContext:
     def __post_init__(self) -> None:
         self.types = self.graph.infer_types()
 
+    @classmethod
+    def from_options(cls, graph: Graph, registry: LoweringRegistry,
+                     options: Mapping[str, Any], **fields: Any) -> LoweringContext:
+        """A context whose motifs and settings come from compile options (tests, doctests).
+
+        Examples
+        --------
+        >>> from compiler.lowering import default_registry
+        >>> from compiler.lowering.options import CfarOptions
+        >>> g = Graph.from_dict({"name": "x", "nodes": [
+        ...     {"id": "a", "op": "input", "shape": {"range": 4}},
+        ...     {"id": "o", "op": "output", "input": "a"}]})
+        >>> ctx = LoweringContext.from_options(g, default_registry(), {"time_steps": 32})
+        >>> ctx.settings_of(CfarOptions).time_steps
+        32
+        """
+        return cls(graph=graph, registry=registry, motifs=dict(options.get("motifs") or {}),
+                   settings=motif_settings(options), **fields)
+
+    def settings_of(self, model: type[_Model]) -> _Model:
+        """The typed options of one motif family (its defaults when none were given)."""
+        found = self.settings.get(model)
+        return found if isinstance(found, model) else model()
+
     # ------------------------------------------------------------- choices
     def motif_for(self, node: str) -> str:
         """The motif chosen for ``node``: by node id, host if pinned, by op name, the default."""
         op = self.graph.op(node)
-        motifs = self.options.get("motifs") or {}
+        motifs = self.motifs
         if node in motifs:
             motif = motifs[node]
         elif node in self.host_pinned:
@@ -97,11 +131,6 @@ class LoweringContext:
             motif = motifs.get(op.op, self.registry.default_motif(type(op)))
         self.registry.rule(type(op), motif, node=node)  # raises a clear error if unknown
         return motif
-
-    def option(self, name: str, default: Any = None) -> Any:
-        """A compile option by name."""
-        value = self.options.get(name)
-        return default if value is None else value
 
     # ------------------------------------------------------------ networks
     @property

@@ -60,6 +60,7 @@ import scipy.sparse as sp
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import PART_IN, PART_OUT, dft_axes
 from compiler.lowering.dft_rate import calibrated_bound, normalize_axes_of
+from compiler.lowering.options import FftOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
 from compiler.snn import PART_AXIS, Decoder, LatencyCode, NeuronParams, Phase
@@ -76,7 +77,7 @@ __all__ = [
 
 MOTIF = "time-fft"
 #: Time steps ``T`` per layer when the option ``time_steps`` is not given.
-DEFAULT_STEPS = 256
+DEFAULT_STEPS = FftOptions().time_steps  # declared in compiler.lowering.options
 #: Weights are rounded to multiples of this (dyadic) quantum.
 WEIGHT_QUANTUM = 2.0 ** -24
 #: Factor on the interpolated bounds of the layers between input and output.
@@ -299,17 +300,17 @@ def lower_fft(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> S
     if not isinstance(op, DFT):
         raise CompileError(f"node {node!r}: motif {MOTIF!r} lowers 'dft' only, got {op.op!r}",
                            node=node)
-    steps = int(ctx.option("time_steps", DEFAULT_STEPS))
+    steps = ctx.settings_of(FftOptions).time_steps
     if steps < 2 or steps % 2:
         raise CompileError(f"node {node!r} ({MOTIF}): time_steps={steps} must be even and >= 2 "
                            f"(the code's zero sits at T/2); use {steps + 1}", node=node)
     in_type = ctx.types[value.node]
     axes = dft_axes(node, op, in_type)
-    radices = ctx.option("fft_radices")
+    radices = ctx.settings_of(FftOptions).fft_radices
     stages = op_stages(op, axes.n_in, None if radices is None else tuple(radices))
     split = "re_im" if in_type.complex else "none"
     found = calibrated_bound(ctx, value.node)
-    x_bound = found if found else float(ctx.option("input_range", 1.0))
+    x_bound = found if found else ctx.settings_of(FftOptions).input_range
     code = LatencyCode(t_min=0, t_max=steps, x_min=-x_bound, x_max=x_bound)
     source = ctx.encode(value, consumer=node, code=code, split=split, motif=MOTIF,
                         normalize_axes=normalize_axes_of(ctx, value.node))

@@ -56,8 +56,8 @@ Examples
 ...     {"id": "f", "op": "dft", "input": "x", "axis": "sample", "out_axis": "bin"},
 ...     {"id": "o", "op": "output", "input": "f"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_rate(reg)
->>> ctx = LoweringContext(graph=g, registry=reg, options={"motifs": {"dft": "rate"},
-...                                                       "time_steps": 2000})
+>>> ctx = LoweringContext.from_options(g, reg, {"motifs": {"dft": "rate"},
+...                                             "time_steps": 2000})
 >>> net = lower_graph(ctx)[0].network
 >>> net.population["f/out"].shape, net.n_steps
 ({'bin': 8, 'part': 4}, 2000)
@@ -74,6 +74,7 @@ import numpy as np
 
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
+from compiler.lowering.options import RateOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
 from compiler.snn import Decoder, NeuronParams, Phase, RateCode, Split
@@ -97,7 +98,7 @@ __all__ = [
 #: Motif name in the registry and the compile option ``motifs``.
 MOTIF = "rate"
 #: Steps of the frame when the option ``time_steps`` is not given.
-DEFAULT_STEPS = 2000
+DEFAULT_STEPS = RateOptions().time_steps  # declared in compiler.lowering.options
 #: Spikes per step of an encoded input at its range ``X``.
 INPUT_RATE = 0.5
 #: Spikes per step of the busiest output neuron at its bound ``Y``.
@@ -134,7 +135,7 @@ def calibrated_bound(ctx: LoweringContext, node: str) -> float | None:
     --------
     >>> from types import SimpleNamespace
     >>> ctx = SimpleNamespace(calibration={"x": {"max_re": 3.0, "max_im": 2.0}},
-    ...                       option=lambda name, default=None: default)
+    ...                       settings_of=lambda model: model())
     >>> calibrated_bound(ctx, "x"), calibrated_bound(ctx, "y") is None
     (3.0, True)
     """
@@ -150,7 +151,7 @@ def calibrated_bound(ctx: LoweringContext, node: str) -> float | None:
         bound = max(get("max_re"), get("max_im") or 0.0)
     if not bound or bound <= 0:
         return None
-    return float(bound) * float(ctx.option("headroom", 1.0))
+    return float(bound) * ctx.settings_of(RateOptions).headroom
 
 
 def normalize_axes_of(ctx: LoweringContext, node: str) -> tuple[str, ...]:
@@ -198,7 +199,7 @@ def rate_threshold(y_bound: float, scale_in: float, out_rate: float = OUTPUT_RAT
 
 
 def _steps(ctx: LoweringContext, node: str) -> int:
-    steps = int(ctx.option("time_steps", DEFAULT_STEPS))
+    steps = ctx.settings_of(RateOptions).time_steps
     if steps < 2:
         raise CompileError(f"node {node!r} (rate): time_steps={steps} is too short; a rate code "
                            f"needs many steps (default {DEFAULT_STEPS})", node=node)
@@ -213,7 +214,7 @@ def _rate_input(ctx: LoweringContext, node: str, value: Value, steps: int):
         return value.population, "re_im_signed", code["scale"], code["bound"]
     split: Split = "re_im_signed" if ctx.types[value.node].complex else "signed"
     found = calibrated_bound(ctx, value.node)
-    x_bound = found if found else float(ctx.option("input_range", 1.0))
+    x_bound = found if found else ctx.settings_of(RateOptions).input_range
     rate_code = RateCode(x_min=0.0, x_max=x_bound, max_rate=INPUT_RATE, phase=INPUT_PHASE)
     pop = ctx.encode(value, consumer=node, code=rate_code, split=split, motif=MOTIF,
                      normalize_axes=normalize_axes_of(ctx, value.node))

@@ -60,6 +60,7 @@ from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
 from compiler.lowering.graded import graded_layer
 from compiler.lowering.layer_weights import coarsen, connect_levels, integer_target
+from compiler.lowering.options import TimeDftOptions
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.stage_gains import (
     exact_weight_bits,
@@ -97,7 +98,7 @@ __all__ = ["DEFAULT_TIME_STEPS", "TimeCode", "LayerInput", "calibration_of", "he
            "time_source", "time_layer", "lower_time_linear", "register_time"]
 
 #: Charging (and encoding) window ``T`` when the ``time_steps`` option is not given.
-DEFAULT_TIME_STEPS = 256
+DEFAULT_TIME_STEPS = TimeDftOptions().time_steps  # declared in compiler.lowering.options
 _KIND = "time-linear"
 
 
@@ -142,7 +143,7 @@ class LayerInput:
 
 
 def _steps(ctx: LoweringContext) -> int:
-    t = int(ctx.option("time_steps", DEFAULT_TIME_STEPS))
+    t = ctx.settings_of(TimeDftOptions).time_steps
     if t < 2:
         raise CompileError(f"time_steps={t} is too short for a time code; use >= 2 (256 typical)")
     return t
@@ -162,7 +163,7 @@ def calibration_of(ctx: LoweringContext, node: str, consumer: str) -> NodeCalibr
 
 def headroom_of(ctx: LoweringContext) -> float:
     """The calibration headroom (option ``headroom``, default 1)."""
-    return float(ctx.option("headroom", 1.0))
+    return ctx.settings_of(TimeDftOptions).headroom
 
 
 def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str,
@@ -182,7 +183,7 @@ def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str
     host = ctx.to_host(value)
     rec = calibration_of(ctx, host.node, consumer)
     t = _steps(ctx)
-    setting = TimeInputOptions.of(ctx).encoder_headroom
+    setting = ctx.settings_of(TimeInputOptions).encoder_headroom
     full = rec.max_part * headroom_of(ctx) * encoder_headroom(rec, setting) or 1.0
     split: Split = "re_im_signed" if host.type.complex else "signed"
     builder = ctx.builder()
@@ -196,7 +197,7 @@ def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str
                                              rounding=input_rounding(ctx, consumer, rec,
                                                                      full / t, split)),
                             normalize_axes=rec.normalize_axes))
-    builder.meta["calibration"] = ctx.option("calibration", "static")
+    builder.meta["calibration"] = ctx.settings_of(TimeDftOptions).calibration
     return pop.id, TimeCode(end=t, scale=full / t, split=split)
 
 
@@ -255,7 +256,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
         return graded_layer(ctx, node, code_in, inputs, shape=shape, split=split,
                             full_scale=full_scale, motif=motif, gain_axis=gain_axis,
                             gains=gains, bits=bits, whole=bool(whole))
-    mode = ctx.option("charging", "auto")
+    mode = ctx.settings_of(TimeDftOptions).charging
     n_guard, guard = 0, 1.0
     if mode != "constant" and not _allow_companding(ctx, node):
         mode = "constant"
@@ -391,7 +392,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
             full, samples = full / top, tuple(x / top for x in samples)
     m = real_weights(w, code_in.split, split)
     bits = None
-    if scaled and ctx.option("weight_bits") is None:
+    if scaled and ctx.settings_of(TimeDftOptions).weight_bits is None:
         bits = exact_weight_bits(_steps(ctx), n_rows)
     layer_in = LayerInput(source, m, axes.contract(code_in.split), axes.produce(split),
                           _host_moment(ctx, x, axes.axis))

@@ -58,6 +58,7 @@ from compiler.hardware.formats import bias_value
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.dft_time import TimeCode, _steps, calibration_of, headroom_of
+from compiler.lowering.options import ResonatorOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.resonator_fixed import (
     CHIP_COEF_BITS,
@@ -97,7 +98,7 @@ def _bits(ctx: LoweringContext, node: str, ratio: float) -> tuple[int, int]:
     one projection each, so every weight ``2^(b+s)`` is one mantissa ``≤ 2^(w−2)`` under
     its projection's exponent: no split synapses)."""
     w_bits = getattr(ctx.target, "weight_bits", None)
-    given = ctx.option("stream_bits")
+    given = ctx.settings_of(ResonatorOptions).stream_bits
     if not w_bits:
         bits = int(given or DEFAULT_STREAM_BITS)
         if not 1 <= bits <= 30:
@@ -147,7 +148,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     split_in = "re_im_signed" if in_type.complex else "signed"
     p_in = N_PARTS[split_in]
     rec_in = calibration_of(ctx, host.node, node)
-    setting = TimeInputOptions.of(ctx).encoder_headroom
+    setting = ctx.settings_of(TimeInputOptions).encoder_headroom
     x_max = rec_in.max_part * headroom_of(ctx) * encoder_headroom(rec_in, setting) or 1.0
     rec = calibration_of(ctx, node, node)
     full = rec.max_part * headroom_of(ctx) or 1.0  # largest output part (value units)
@@ -170,7 +171,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
                             code=code))
     freqs, m = _frequencies(node, op, n)  # m input steps (n samples, then zeros)
     theta = bin_angles(freqs, m)
-    rho = float(ctx.option("resonator_decay", 1.0))
+    rho = ctx.settings_of(ResonatorOptions).resonator_decay
     if not 0.0 < rho <= 1.0:
         raise CompileError(f"node {node!r}: resonator_decay={rho} is outside (0, 1]", node=node)
     integer = bool(getattr(ctx.target, "weight_bits", None))
@@ -183,7 +184,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
         c, s = float_coefficients(theta, rho)
     b, scales = _readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
     drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit)
-    given = ctx.option("resonator_drift_max")
+    given = ctx.settings_of(ResonatorOptions).resonator_drift_max
     limit = DRIFT_MAX if given is None else float(given)
     if drift["bound"] > limit and given is None:
         warnings.warn(
@@ -246,7 +247,7 @@ def _host_read(ctx: LoweringContext, node: str) -> bool:
 def _readout(ctx: LoweringContext, node: str) -> str:
     """Option ``resonator_readout``: ``auto`` is ``graded`` where the target has graded spikes
     and the value goes to the host, else ``time``."""
-    readout = str(ctx.option("resonator_readout", "auto"))
+    readout = ctx.settings_of(ResonatorOptions).resonator_readout
     if readout not in ("auto", "time", "graded"):
         raise CompileError(f"node {node!r}: resonator_readout={readout!r} is not 'auto', "
                            "'time' or 'graded'", node=node)
@@ -263,7 +264,7 @@ def _coefficients(ctx: LoweringContext, theta: np.ndarray, rho: float, n: int,
                   full_state: float) -> tuple[np.ndarray, np.ndarray, int]:
     """Fixed-point coefficients: option ``resonator_coef_bits``, else the chip's format
     (:data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS`), never widened here."""
-    given = ctx.option("resonator_coef_bits")
+    given = ctx.settings_of(ResonatorOptions).resonator_coef_bits
     f_bits = CHIP_COEF_BITS if given is None else int(given)
     c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
     return c, s, f_bits

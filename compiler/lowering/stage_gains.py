@@ -63,6 +63,7 @@ import numpy as np
 
 from compiler.calibration import NodeCalibration
 from compiler.lowering.context import LoweringContext
+from compiler.lowering.options import TimeDftOptions
 from compiler.lowering.registry import HOST, LoweringRule
 from ir.errors import CompileError
 
@@ -107,11 +108,11 @@ def integer_weight_bits(ctx: LoweringContext) -> int | None:
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> integer_weight_bits(SimpleNamespace(option=lambda k, d=None: d,
+    >>> integer_weight_bits(SimpleNamespace(settings_of=lambda model: model(),
     ...                                     target=SimpleNamespace(weight_bits=8)))
     8
     """
-    return ctx.option("weight_bits") or getattr(ctx.target, "weight_bits", None)
+    return ctx.settings_of(TimeDftOptions).weight_bits or getattr(ctx.target, "weight_bits", None)
 
 
 def gain_mechanism(ctx: LoweringContext) -> str | None:
@@ -131,12 +132,12 @@ def gain_mechanism(ctx: LoweringContext) -> str | None:
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> ctx = SimpleNamespace(option=lambda k, d=None: {"stage_gains": "auto"}.get(k, d),
+    >>> ctx = SimpleNamespace(settings_of=lambda model: model(stage_gains="auto"),
     ...                       target=SimpleNamespace(weight_bits=8))
     >>> gain_mechanism(ctx)
     'neurons'
     """
-    mode = ctx.option("stage_gains", STAGE_GAINS[0])
+    mode = ctx.settings_of(TimeDftOptions).stage_gains
     if mode == "none":
         return None
     if mode in ("weights", "neurons"):
@@ -210,7 +211,7 @@ def stage_gains(ctx: LoweringContext, node: str, axis: str, n_rows: int, *, t_st
     --------
     End to end in ``tests/test_stage_gains.py``; the levels are :func:`index_levels`.
     """
-    mode = ctx.option("stage_gains", STAGE_GAINS[0])
+    mode = ctx.settings_of(TimeDftOptions).stage_gains
     if mode not in STAGE_GAINS:
         raise CompileError(f"node {node!r}: stage_gains={mode!r} is not a mode; use one of "
                            f"{', '.join(STAGE_GAINS)}", node=node)

@@ -11,15 +11,13 @@ Both serve a calibration that transfers to frames the calibration set did not co
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
-
 import networkx as nx
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
 
 from compiler.calibration import NodeCalibration
-from compiler.lowering.charging import GUARD_RATIO, guard_steps
+from compiler.lowering.charging import guard_steps
 from compiler.lowering.context import LoweringContext
+from compiler.lowering.options import TimeInputOptions  # its home; re-exported here
 from compiler.snn import Split
 from compiler.snn.coding import split_values
 from ir.errors import BudgetError, CompileError
@@ -66,26 +64,6 @@ def encoder_headroom(rec: NodeCalibration, setting: float | str = "auto") -> flo
     return max(ENCODER_HEADROOM, spread)
 
 
-class TimeInputOptions(BaseModel):
-    """Options of the time-coded S-FT's input rounding and read-out (typed fields)."""
-
-    model_config = ConfigDict(frozen=True, extra="ignore")
-    input_rounding: Literal["auto", "nearest", "dither"] = Field(
-        "auto", description="auto, nearest or dither")
-    charging_guard: float = Field(GUARD_RATIO, ge=1, allow_inf_nan=False,
-                                  description="a finite number >= 1 (1: no guard)")
-    output_spikes: Literal["auto", "time", "graded"] = Field(
-        "auto", description="auto, time or graded")
-    encoder_headroom: Literal["auto"] | Annotated[float, Field(ge=1, allow_inf_nan=False)] = Field(
-        "auto", description="auto or a finite number >= 1")
-
-    @classmethod
-    def of(cls, ctx: LoweringContext) -> TimeInputOptions:
-        """The options of ``ctx`` (already checked by ``compile_graph``; None = default)."""
-        return cls.model_validate({k: v for k, v in ctx.options.items()
-                                   if k in cls.model_fields and v is not None})
-
-
 def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
                    step_size: float, split: Split) -> str:
     """How the host encoder of ``consumer``'s input rounds (option ``input_rounding``).
@@ -103,11 +81,11 @@ def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> input_rounding(SimpleNamespace(options={"input_rounding": "nearest"}), "f", None, 1.0,
-    ...                "signed")
+    >>> ctx = SimpleNamespace(settings_of=lambda model: model(input_rounding="nearest"))
+    >>> input_rounding(ctx, "f", None, 1.0, "signed")
     'nearest'
     """
-    mode = TimeInputOptions.of(ctx).input_rounding
+    mode = ctx.settings_of(TimeInputOptions).input_rounding
     if mode != "auto":
         return mode
     graph = ctx.graph
@@ -165,7 +143,7 @@ def guard_of(ctx: LoweringContext, node: str, t_steps: int) -> tuple[int, float]
     while the guard's threshold range would cost weight bits (the Doppler layer of the
     seed003 chain: 8 → 6 on loihi2, cell sensitivity 0.965 → 0.854).
     """
-    ratio = TimeInputOptions.of(ctx).charging_guard
+    ratio = ctx.settings_of(TimeInputOptions).charging_guard
     rec = ctx.calibration.get(node)
     consumers = ctx.graph.consumers_of(node)
     if (ratio <= 1 or rec is None or rec.source == "bounds" or not consumers
@@ -187,7 +165,7 @@ def graded_readout(ctx: LoweringContext, node: str, *, host_only: bool,
     target has graded spikes and the layer has no per-neuron gains (their scales act on
     the charging stage); ``graded`` on a target without graded spikes is an error.
     """
-    mode = TimeInputOptions.of(ctx).output_spikes
+    mode = ctx.settings_of(TimeInputOptions).output_spikes
     bits = getattr(ctx.target, "graded_spike_bits", None)
     if mode == "time":
         return False

@@ -5,7 +5,8 @@ kebab-case name used in options and reports), its options as fields, and one
 ``apply(ctx, program)``.  The contract: given a program whose graph verifies,
 return one whose graph still verifies and whose segments are consistent.
 Passes never read globals; everything they need is in the explicit
-:class:`CompileContext`.
+:class:`CompileContext` or in their own typed fields — the options of a pass are its
+fields, set from the compile options in one place (:func:`compiler.compile.default_pipeline`).
 
 Examples
 --------
@@ -56,9 +57,6 @@ class CompileContext:
     ----------
     target : object, optional
         The hardware profile (``compiler.hardware``), None for an unbounded target.
-    options : dict
-        Compile options by name (``motifs``, ``calibration``, ``time_steps``,
-        ``weight_bits`` …); passes read the ones they know.
     calibration_inputs : dict of str to ndarray
         Sample inputs by input node id, for the calibrate pass.
     lowering : object, optional
@@ -72,7 +70,6 @@ class CompileContext:
     """
 
     target: Any = None
-    options: dict[str, Any] = field(default_factory=dict)
     calibration_inputs: Mapping[str, Any] = field(default_factory=dict)
     lowering: Any = None
     evaluators: Mapping[type, Callable[..., Any]] = field(default_factory=dict)

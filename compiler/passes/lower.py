@@ -5,6 +5,8 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
+from pydantic import BaseModel
+
 from compiler.lowering import LoweringContext, default_registry, lower_graph
 from compiler.passes.base import CompileContext, Pass
 from compiler.passes.static_split import host_nodes
@@ -22,6 +24,14 @@ class Lower(Pass):
     Reads ``program.records["calibrate"]`` (per-node calibration) when present
     and stores, under ``records["lower"]``, the motif chosen for every node.
 
+    Attributes
+    ----------
+    motifs : tuple of (str, str)
+        The user's motif choices, node id or op name → motif (compile option ``motifs``).
+    settings : tuple of models
+        The motifs' typed options (:func:`compiler.lowering.options.motif_settings`;
+        ``compile_graph`` sets them; a model not given takes its defaults).
+
     Examples
     --------
     >>> from ir import Graph
@@ -35,12 +45,15 @@ class Lower(Pass):
     """
 
     name = "lower"
+    motifs: tuple[tuple[str, str], ...] = ()
+    settings: tuple[BaseModel, ...] = ()
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         registry = ctx.lowering or default_registry()
         calibration = program.records.get("calibrate") or {}
         split = program.records.get("static-split") or []
-        lctx = LoweringContext(graph=program.graph, registry=registry, options=ctx.options,
+        lctx = LoweringContext(graph=program.graph, registry=registry, motifs=dict(self.motifs),
+                               settings={type(s): s for s in self.settings},
                                calibration=getattr(calibration, "nodes", calibration),
                                target=ctx.target, host_pinned=frozenset(host_nodes(split)),
                                moving=frozenset(n for r in split for n in r["moving"]))
