@@ -78,7 +78,12 @@ def test_placer_is_replaceable_and_out_of_cores_raises():
     def one_per_core(demand, limits, affinity, n_cores):
         return np.arange(len(demand))
 
-    assert place([net], None, PROFILE, placer=one_per_core).core.tolist() == [0, 1, 2, 3]
+    kept = place([net], None, PROFILE, placer=one_per_core, chip_assignment="placer")
+    assert kept.core.tolist() == [0, 1, 2, 3] and kept.traffic["inter_chip"] == 8.0
+    # the chip assignment regroups the placer's cores (a0 a1 | b0 b1 -> a0 b0 | a1 b1): every
+    # b-core then gets 2 of its 4 a-spikes from the other chip instead of all 4
+    regrouped = place([net], None, PROFILE, placer=one_per_core)
+    assert regrouped.core.tolist() == [0, 2, 1, 3] and regrouped.traffic["inter_chip"] == 4.0
     small = PROFILE.model_copy(update={"chips": 1})
     with pytest.raises(BudgetError, match=r"node '[AB]' \(motif .*4 blocks.*2 cores of "
                        r"two-by-two.*2 blocks were left over.*larger 'chips'"):

@@ -22,18 +22,27 @@ from typing import Any
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_serializer
 
 from ir.errors import CompileError
 from ir.model import short_repr
 
-__all__ = ["BUDGETS", "BUILTIN_PROFILES", "HardwareProfile", "load_profile"]
+__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "HardwareProfile",
+           "load_profile"]
 
 #: The per-core budgets, in the column order of every demand array.
 BUDGETS: tuple[str, ...] = ("neurons", "input_axons", "output_axons", "synapse_bits")
 
 #: Names of the profiles shipped in ``compiler/hardware/profiles/*.yaml``.
 BUILTIN_PROFILES: tuple[str, ...] = ("loihi", "loihi2", "spinnaker2", "unbounded")
+
+#: Multi-chip boards in ``compiler/hardware/boards/*.yaml`` (a chip profile, chips, links).
+BUILTIN_BOARDS: tuple[str, ...] = ("kapoho_point", "nahuku32", "spinnaker2_48", "hala_point")
+
+#: Fields only boards set; left out of the serialised profile when unset (``None``), so a
+#: single-chip profile serialises as before they existed.
+BOARD_FIELDS: tuple[str, ...] = ("chip_profile", "inter_chip_bandwidth_bit_s",
+                                 "inter_chip_latency_s", "spike_message_bits")
 
 _Count = int | None
 
@@ -83,6 +92,14 @@ class HardwareProfile(BaseModel):
     shared_weights_per_core : bool
         Whether a core stores a shared matrix or stencil kernel once for all the
         neurons it holds, instead of once per neuron/repetition.
+    chip_profile : str or None
+        For a board: the chip profile it is made of (its per-core budgets and formats).
+    inter_chip_bandwidth_bit_s : float or None
+        Off-chip spike bandwidth of one chip, each direction, bit/s (``None``: not given).
+    inter_chip_latency_s : float or None
+        Delay a time step gains when its spikes cross a chip boundary, s.
+    spike_message_bits : int or None
+        Bits of one spike message on a chip-to-chip link.
     description : str
         Where the figures come from.
     """
@@ -111,7 +128,19 @@ class HardwareProfile(BaseModel):
     max_steps_per_frame: _Count = Field(default=None, ge=1)
     time_step_s: float | None = Field(default=None, gt=0)
     shared_weights_per_core: bool = False
+    chip_profile: str | None = None
+    inter_chip_bandwidth_bit_s: float | None = Field(default=None, gt=0)
+    inter_chip_latency_s: float | None = Field(default=None, ge=0)
+    spike_message_bits: _Count = Field(default=None, ge=1, le=1024)
     description: str = ""
+
+    @model_serializer(mode="wrap")
+    def _without_unset_board_fields(self, handler):
+        data = handler(self)
+        for key in BOARD_FIELDS:
+            if data.get(key) is None:
+                data.pop(key, None)
+        return data
 
     @property
     def n_cores(self) -> int | None:
@@ -176,11 +205,15 @@ def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile
     --------
     >>> load_profile("spinnaker2").cores_per_chip
     152
+    >>> b = load_profile("kapoho_point")
+    >>> b.chip_profile, b.chips, b.n_cores, b.neurons_per_core
+    ('loihi2', 8, 1024, 8192)
     >>> load_profile("tpu")
     Traceback (most recent call last):
     ...
     ir.errors.CompileError: unknown hardware profile 'tpu'; built-in profiles are loihi, \
-loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
+loihi2, spinnaker2, unbounded, boards kapoho_point, nahuku32, spinnaker2_48, hala_point, or \
+give a path to a YAML profile file
     """
     if isinstance(target, HardwareProfile):
         return target
@@ -189,13 +222,17 @@ loihi2, spinnaker2, unbounded, or give a path to a YAML profile file
     if isinstance(target, str) and target in BUILTIN_PROFILES:
         text = resources.files("compiler.hardware").joinpath(f"profiles/{target}.yaml")
         return _from_text(text.read_text(encoding="utf-8"), f"built-in profile {target!r}")
+    if isinstance(target, str) and target in BUILTIN_BOARDS:
+        text = resources.files("compiler.hardware").joinpath(f"boards/{target}.yaml")
+        return _from_text(text.read_text(encoding="utf-8"), f"built-in board {target!r}")
     if not isinstance(target, str | Path):
         raise CompileError(f"hardware target must be a profile name, a YAML path or a "
                            f"HardwareProfile; got {type(target).__name__} {target!r}")
     path = Path(target)
     if not (isinstance(target, Path) or path.suffix in (".yaml", ".yml")):
         raise CompileError(f"unknown hardware profile {target!r}; built-in profiles are "
-                           f"{', '.join(BUILTIN_PROFILES)}, or give a path to a YAML profile file")
+                           f"{', '.join(BUILTIN_PROFILES)}, boards {', '.join(BUILTIN_BOARDS)}, "
+                           "or give a path to a YAML profile file")
     try:
         if not path.is_file() or path.stat().st_size > 1 << 20:  # not /dev/zero, not a giant
             raise CompileError(f"hardware profile file {str(path)!r} cannot be read: not a "
@@ -220,6 +257,10 @@ def _from_text(text: str, label: str) -> HardwareProfile:
     if not isinstance(data, dict):
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
+    if data.get("chip_profile") is not None:  # a board: its chip's budgets, never loosened
+        from compiler.hardware.boards import board_fields
+
+        data = board_fields(data, label)
     try:  # model_validate: a non-string key is a field error, not a TypeError of **data
         return HardwareProfile.model_validate(data)
     except ValidationError as err:

@@ -11,6 +11,11 @@ spike and destination core of every source neuron: from spike sources (encoders)
 it is the host input; the others are inter-core, of which those crossing chips
 (``core // cores_per_chip``) are inter-chip.
 
+**Chips.** On a profile of several chips the used cores are then grouped into chips so that
+the heaviest spike traffic stays on-chip (:mod:`compiler.passes.place_chips`; option
+``chip_assignment="traffic"``, or ``"placer"`` to keep the placer's ``core // cores_per_chip``);
+the placement then holds the chip-to-chip message matrix (``chip_messages``).
+
 **Time-multiplexed stages** (see :mod:`compiler.passes.split`): only one
 instance is placed and it runs :math:`R` times per frame, so messages into its
 blocks count :math:`R` times; synapses that cross the boundary of a multiplexed
@@ -37,15 +42,17 @@ import numpy as np
 from compiler.hardware import BUDGETS, HardwareProfile, load_profile
 from compiler.hardware.activity import measured_spikes, spike_bound
 from compiler.passes.base import CompileContext, Pass
+from compiler.passes.place_chips import chip_assignment as assign_chips
+from compiler.passes.place_chips import chip_matrix
 from compiler.passes.place_greedy import Placer, greedy_placer
-from compiler.passes.place_traffic import block_affinity, spike_traffic
+from compiler.passes.place_traffic import block_affinity, core_messages, spike_traffic
 from compiler.passes.split import split, split_program
 from compiler.passes.split_budget import explain_failure
 from compiler.passes.split_plan import multiplex_candidates, repetition_mode
 from compiler.passes.split_record import SplitRecord, describe
 from compiler.program import CompiledProgram
 from compiler.snn import SpikingNetwork
-from ir.errors import BudgetError
+from ir.errors import BudgetError, CompileError
 
 # Placer and greedy_placer live in place_greedy; importable from here too
 __all__ = ["Place", "Placement", "Placer", "greedy_placer", "place"]
@@ -75,6 +82,11 @@ class Placement:
     multiplexed : list of dict
         ``network``, ``stage``, ``repetitions`` of each time-multiplexed stage: its items
         are the blocks of one instance, run ``repetitions`` times per frame.
+    chip_messages : ndarray, shape (n_chips, n_chips), or None
+        On a multi-chip profile: messages per frame from chip ``i`` to chip ``j`` (the
+        diagonal: between cores of one chip); ``None`` on a single chip.
+    network_inter_chip : list of float
+        On a multi-chip profile: inter-chip messages per frame of each network.
     """
 
     profile: str
@@ -85,6 +97,8 @@ class Placement:
     utilisation: np.ndarray
     traffic: dict = field(default_factory=dict)
     multiplexed: list[dict] = field(default_factory=list)
+    chip_messages: np.ndarray | None = None
+    network_inter_chip: list[float] = field(default_factory=list)
 
     @property
     def n_cores(self) -> int:
@@ -111,7 +125,7 @@ class Placement:
 
 def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
           profile: HardwareProfile | None = None, *, placer: Placer = greedy_placer,
-          sim_results: Sequence | None = None) -> Placement:
+          sim_results: Sequence | None = None, chip_assignment: str = "traffic") -> Placement:
     """Place the blocks of all ``networks`` (resident together) onto the profile's cores.
 
     Parameters
@@ -126,6 +140,9 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
         The placement function (default :func:`greedy_placer`).
     sim_results : sequence of SimResult, optional
         One per network: traffic from measured spike counts instead of the bound.
+    chip_assignment : {"traffic", "placer"}
+        On several chips: group the used cores into chips to keep the heaviest traffic
+        on-chip (:mod:`~compiler.passes.place_chips`), or keep ``core // cores_per_chip``.
 
     Returns
     -------
@@ -169,20 +186,41 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
             f"{profile.cores_per_chip}); {int((core < 0).sum()):,} blocks were left over; use "
             "more chips (a profile file with a larger 'chips') or shrink the network",
             node=pop.origin.get("node", pid))
+    if chip_assignment not in ("traffic", "placer"):
+        raise CompileError(f"option 'chip_assignment' = {chip_assignment!r} is not one of "
+                           "traffic, placer")
     n_used = int(core.max()) + 1 if core.size else 0
-    usage = np.zeros((n_used, 4))
-    np.add.at(usage, core, demand_arr)
-    util = np.where(np.isfinite(limits), usage / np.where(np.isfinite(limits), limits, 1), 0.0)
     spikes = ([measured_spikes(n, s) for n, s in zip(networks, sim_results, strict=True)]
               if sim_results is not None else [spike_bound(n) for n in networks])
     cpc = profile.cores_per_chip
+    board = bool(cpc) and (profile.chips or 0) > 1
+    chip_msgs, per_net = None, []
+    if board:
+        msgs = core_messages(networks, splits, offsets, core, spikes)
+        if chip_assignment == "traffic" and n_used > cpc:
+            new = assign_chips(sum(msgs), cpc)
+            core = new[core]
+            msgs = [_renumbered(m, new) for m in msgs]
+        n_chip = -(-n_used // cpc)
+        mats = [chip_matrix(m, np.arange(n_used) // cpc, n_chip) for m in msgs]
+        chip_msgs = sum(mats) if mats else np.zeros((n_chip, n_chip))
+        per_net = [float(x.sum() - np.trace(x)) for x in mats]
+    usage = np.zeros((n_used, 4))
+    np.add.at(usage, core, demand_arr)
+    util = np.where(np.isfinite(limits), usage / np.where(np.isfinite(limits), limits, 1), 0.0)
     traffic = spike_traffic(networks, splits, offsets, core, cpc, spikes)
     traffic["basis"] = "measured" if sim_results is not None else "bound"
     chip = core // cpc if cpc else np.zeros_like(core)
     mux = [{"network": rec.network, "stage": key, "repetitions": r}
            for rec in splits for key, r in rec.multiplexed.items()]
     return Placement(profile=profile.name, items=items, core=core, chip=chip, usage=usage,
-                     utilisation=util, traffic=traffic, multiplexed=mux)
+                     utilisation=util, traffic=traffic, multiplexed=mux,
+                     chip_messages=chip_msgs, network_inter_chip=per_net)
+
+
+def _renumbered(m, new: np.ndarray):
+    m = m.tocoo()
+    return type(m)((m.data, (new[m.row], new[m.col])), shape=m.shape).tocsr()
 
 
 @dataclass(frozen=True)
@@ -199,14 +237,20 @@ class Place(Pass):
         The placement function.
     repetitions : {"auto", "spatial", "temporal"}
         The ``repetitions`` option, as :class:`~compiler.passes.split.Split`'s.
+    chip_assignment : {"traffic", "placer"}
+        As :func:`place`'s.
     """
 
     name: ClassVar[str] = "place"
     placer: Placer = greedy_placer
     repetitions: str = "auto"
+    chip_assignment: str = "traffic"
 
     def __post_init__(self) -> None:
         repetition_mode(self.repetitions)
+        if self.chip_assignment not in ("traffic", "placer"):
+            raise CompileError(f"option 'chip_assignment' = {self.chip_assignment!r} is not one "
+                               "of traffic, placer")
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         profile = load_profile(ctx.target)
@@ -216,7 +260,8 @@ class Place(Pass):
         cands = multiplex_candidates(networks, profile)
         while True:
             try:
-                placement = place(networks, splits, profile, placer=self.placer)
+                placement = place(networks, splits, profile, placer=self.placer,
+                                  chip_assignment=self.chip_assignment)
                 break
             except BudgetError as err:
                 n = sum(len(r.multiplexed) for r in splits)

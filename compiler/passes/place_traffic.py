@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from compiler.hardware.intsets import unique_keys
 
-__all__ = ["block_affinity", "spike_traffic"]
+__all__ = ["block_affinity", "core_messages", "spike_traffic"]
 
 def block_affinity(splits, offsets) -> sp.csr_matrix:
     """Symmetric ``(blocks × blocks)`` affinity of the placed blocks of all ``splits``."""
@@ -77,3 +77,43 @@ def spike_traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> di
                       if networks[k].incoming(pid) and not dem.reach})
     return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
             "buffered": buffered, "not_counted": missing}
+
+
+def core_messages(networks, splits, offsets, core, spikes) -> list[sp.csr_matrix]:
+    """Per network, the ``(cores × cores)`` messages per frame between cores of the placement.
+
+    Entry ``[a, b]`` sums, over the distinct pairs (destination core ``b``, source neuron on
+    core ``a ≠ b``), the source's spikes per frame (× the target's runs): the ``inter_core``
+    messages of :func:`spike_traffic` by source and destination core (host input and
+    buffered messages excluded).  Summing the entries whose cores lie on different chips
+    gives ``inter_chip``.
+
+    Examples
+    --------
+    >>> core_messages([], [], [], np.zeros(0, np.int64), [])
+    []
+    """
+    n = int(core.max()) + 1 if core.size else 0
+    out = []
+    for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
+        pops = net.population
+        rows, cols, vals = [], [], []
+        for tgt, dem in rec.demand.items():
+            for src, (blk, neuron) in dem.reach.items():
+                if src not in rec.demand or not rec.on_chip(src, tgt):
+                    continue
+                dst = core[offsets[k][tgt] + blk]
+                keys = unique_keys(dst * pops[src].size + neuron)
+                dst, neuron = keys // pops[src].size, keys % pops[src].size
+                home = core[offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron)]
+                away = home != dst
+                rows.append(home[away])
+                cols.append(dst[away])
+                vals.append(np.full(int(away.sum()), spikes[k].get(src, 0.0) * rec.runs(tgt)))
+        if rows:
+            m = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                              shape=(n, n)).tocsr()
+        else:
+            m = sp.csr_matrix((n, n))
+        out.append(m)
+    return out

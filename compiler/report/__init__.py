@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 from compiler.hardware import BUDGETS, load_profile
 from compiler.report.boundaries import boundary_rows
+from compiler.report.chips import chip_rows
 from compiler.report.formats import format_rows
 from compiler.report.frame_io import frame_io
 from compiler.report.opcounts import graph_cfar_op_counts
@@ -148,4 +149,11 @@ def build_report(program, *, sim_results: Sequence | None = None,
         "totals": totals,
         "formats": format_rows(program),
     }
+    if placement is not None and getattr(placement, "chip_messages", None) is not None:
+        # a multi-chip board: the per-chip table and the inter-chip traffic (single chip: none)
+        data["chips"], data["inter_chip"] = chip_rows(placement, profile, rate, lat_rows)
+        added = data["inter_chip"]["added_latency_s"]
+        if total_s is not None and added is not None:
+            data["inter_chip"]["latency_with_inter_chip_s"] = total_s + added
+            data["inter_chip"]["fits"] = total_s + added <= 1.0 / rate
     return Report(data)

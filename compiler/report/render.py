@@ -16,6 +16,11 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
                   neurons, input_axons, output_axons, synapse_bits, utilisation
     traffic       host_input, inter_core, inter_chip, buffered (messages per frame), basis
     totals        inputs, neurons, synapses, synapses_stored, cores, chips, synapse_memory_bits
+    chips[]       (multi-chip profiles only) chip, cores, neurons, synapses, synapse_bits, in, out
+                  (inter-chip messages per frame), in_bit_s, out_bit_s, link_utilisation
+    inter_chip    (multi-chip profiles only) chips, messages_per_frame, bit_s, message_bits,
+                  bandwidth_bit_s, busiest_link_bit_s, link_time_s, hop_latency_s,
+                  crossing_steps, added_latency_s, latency_with_inter_chip_s, fits, note
 """
 
 from __future__ import annotations
@@ -115,6 +120,8 @@ class Report:
                       "Utilisation (mean / max) per budget: " + ", ".join(
                           f"{k} {m:.1%} / {x:.1%}" for k, m, x in
                           zip(d["budgets"], util.mean(axis=0), util.max(axis=0), strict=True))]
+        if d.get("chips"):
+            lines += _chip_lines(d)
         return "\n".join(lines) + "\n"
 
     def save_core_map(self, path: str | Path) -> Path:
@@ -132,6 +139,22 @@ class Report:
         fig.savefig(path, dpi=100, bbox_inches="tight")
         plt.close(fig)
         return path
+
+
+def _chip_lines(d: dict) -> list[str]:
+    x = d["inter_chip"]
+    lines = ["", f"## Chips: {x['chips']} used (inter-chip spike traffic per frame)", ""]
+    lines += _table(d["chips"], ("chip", "cores", "neurons", "synapses", "in", "out", "in_bit_s",
+                                 "out_bit_s", "link_utilisation"))
+    lines += ["", f"Inter-chip: {_fmt(x['messages_per_frame'])} messages per frame = "
+              f"{_fmt(x['bit_s'])} bit/s at {_fmt(x['message_bits'])} bits per message; busiest "
+              f"chip link {_fmt(x['busiest_link_bit_s'])} bit/s of {_fmt(x['bandwidth_bit_s'])}. "
+              f"Added latency ≤ {_fmt(x['crossing_steps'])} crossing steps × "
+              f"{_fmt(x['hop_latency_s'])} s + {_fmt(x['link_time_s'])} s on the busiest link = "
+              f"{_fmt(x['added_latency_s'])} s per frame"
+              + (f"; with it the frame takes {_fmt(x['latency_with_inter_chip_s'])} s, fits = "
+                 f"{_fmt(x['fits'])}" if "fits" in x else "") + ".", "", f"Note: {x['note']}."]
+    return lines
 
 
 def _json_default(o):
