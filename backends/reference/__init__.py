@@ -19,6 +19,7 @@ from backends.reference.neuron import NeuronState, StepParams, decay, neuron_ste
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.program import ProgramResult, program_plans, run_program
 from backends.reference.result import SimResult
+from backends.reference.run_options import RunOptions
 from backends.reference.simulate import RASTER_LIMIT_BYTES, simulate
 
 __all__ = [
@@ -27,6 +28,7 @@ __all__ = [
     "MatrixDelivery",
     "NeuronState",
     "ProgramResult",
+    "RunOptions",
     "SimPlan",
     "SimResult",
     "StencilDelivery",

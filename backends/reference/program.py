@@ -22,7 +22,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
+from backends.reference.run_options import RunOptions
 from backends.reference.simulate import simulate
 from backends.reference.units import apply_units, normalize_inputs, normalized_inputs, unit_plan
 from compiler.program import CompiledProgram
@@ -198,7 +199,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 plans: Sequence[SimPlan] | None = None, out_of_range: str = DEFAULT_POLICY,
                 max_memory_bytes: int | None = MAX_MEMORY_BYTES,
                 max_time_s: float | None = MAX_TIME_S,
-                progress: Callable[[int, int], None] | None = None) -> ProgramResult:
+                progress: Callable[[int, int], None] | None = None,
+                options: RunOptions | None = None) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
     Parameters
@@ -232,6 +234,11 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         holds per frame.
     progress : callable, optional
         ``progress(done, total)`` after each frame of a framed run (e.g. a tqdm update).
+    options : RunOptions, optional
+        ``mode``, ``arithmetic``, ``record_spikes``, ``out_of_range``,
+        ``max_memory_bytes`` and ``max_time_s`` as one record (it replaces those
+        arguments); every spiking segment runs with it
+        (:mod:`backends.reference.run_options`).
 
     Raises
     ------
@@ -253,6 +260,12 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     :class:`~ir.errors.IRError` naming the node and the fix.
     """
     where = f"program {program.graph.name!r}"
+    if options is None:
+        options = RunOptions(mode=mode, arithmetic=arithmetic, record_spikes=record_spikes,
+                             out_of_range=out_of_range, max_memory_bytes=max_memory_bytes,
+                             max_time_s=max_time_s)
+    mode, arithmetic, out_of_range = options.mode, options.arithmetic, options.out_of_range
+    max_memory_bytes, max_time_s = options.max_memory_bytes, options.max_time_s
     check_policy(out_of_range, where)
     if not isinstance(inputs, Mapping):
         raise SimulationError(f"{where}: inputs must be a mapping of input node id to array; "
@@ -281,10 +294,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                               f"{sorted(missing)}, unknown {sorted(extra)})")
     count = n_frames(types, inputs, where)
     if count is not None:
-        return _run_frames(program, inputs, count, progress, mode=mode, arithmetic=arithmetic,
-                           record_spikes=record_spikes, out_of_range=out_of_range,
-                           plans=list(plans) if plans is not None else None,
-                           max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
+        return _run_frames(program, inputs, count, progress, options,
+                           plans=list(plans) if plans is not None else None)
     # every node's value is kept: refuse what cannot fit before the first is allocated
     check_value_sizes(graph, types, types, max_memory_bytes=check_limit(
         "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
@@ -302,10 +313,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         if seg.kind == "spiking":
             plan = None if plans is None else plans[len(sims)]
             policy = {p: "clip" if p in decoded else out_of_range for p in seg.inputs}
-            result = simulate(seg.network, {p: values[p] for p in seg.inputs}, mode=mode,
-                              arithmetic=arithmetic, record_spikes=record_spikes, plan=plan,
-                              out_of_range=policy, max_memory_bytes=max_memory_bytes,
-                              max_time_s=max_time_s)
+            result = simulate(seg.network, {p: values[p] for p in seg.inputs}, plan=plan,
+                              options=replace(options, out_of_range=policy))
             decoded.update(result.outputs)
             # a decoded mask (0/1 from spikes) is a boolean array, like the interpreter's
             values.update({k: (np.asarray(v) != 0) if types[k].domain == "mask" else v
@@ -326,15 +335,16 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
 
 
 def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], count: int,
-                progress: Callable[[int, int], None] | None, *, plans: list[SimPlan] | None,
-                max_memory_bytes: int | None, arithmetic: str, **options) -> ProgramResult:
+                progress: Callable[[int, int], None] | None, options: RunOptions, *,
+                plans: list[SimPlan] | None) -> ProgramResult:
     """:func:`run_program` frame by frame, plans built once; the results stacked."""
-    plans = plans if plans is not None else program_plans(program, arithmetic)
-    share = None if max_memory_bytes is None else max(1, int(max_memory_bytes) // count)
+    plans = plans if plans is not None else program_plans(program, options.arithmetic)
+    limit = options.max_memory_bytes
+    per_frame = replace(options, max_memory_bytes=None if limit is None else
+                        max(1, int(limit) // count))
     runs = []
     for i in range(count):
-        runs.append(run_program(program, frame(inputs, i), plans=plans, arithmetic=arithmetic,
-                                max_memory_bytes=share, **options))
+        runs.append(run_program(program, frame(inputs, i), plans=plans, options=per_frame))
         if progress is not None:
             progress(i + 1, count)
     first = runs[0]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,14 +19,11 @@ from backends.reference.guards import (
 from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import Activity, SimResult
+from backends.reference.run_options import RunOptions
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
 from ir.limits import check_limit
-
-if TYPE_CHECKING:
-    from backends.reference.program import ProgramResult
-    from compiler.program import CompiledProgram
 
 __all__ = ["simulate", "ENGINES", "RASTER_LIMIT_BYTES"]
 
@@ -41,7 +37,7 @@ ENGINES: dict[str, Callable[..., Activity]] = {"step": run_step, "closed": run_c
 
 
 def simulate(
-    network: SpikingNetwork | CompiledProgram,
+    network: SpikingNetwork,
     inputs: Mapping[str, np.ndarray],
     *,
     mode: str = "step",
@@ -52,16 +48,18 @@ def simulate(
     out_of_range: str | Mapping[str, str] = DEFAULT_POLICY,
     max_memory_bytes: int | None = MAX_MEMORY_BYTES,
     max_time_s: float | None = MAX_TIME_S,
-) -> SimResult | ProgramResult:
-    """Simulate a spiking network (or a whole compiled program) on a batch of inputs.
+    options: RunOptions | None = None,
+) -> SimResult:
+    """Simulate a spiking network on a batch of inputs.
+
+    A whole compiled program (spiking and host segments) runs with
+    :func:`~backends.reference.program.run_program`, which calls this function for
+    each spiking segment with the same :class:`~backends.reference.run_options.RunOptions`.
 
     Parameters
     ----------
-    network : SpikingNetwork or CompiledProgram
-        The network (validated here), or a whole compiled program: then the
-        call is :func:`~backends.reference.program.run_program` and returns its
-        :class:`~backends.reference.program.ProgramResult` (decoded values by
-        IR node id, spike and synaptic-event counts of every segment).
+    network : SpikingNetwork
+        The network (validated here).
     inputs : mapping of port to ndarray
         One array per encoder port, of the port's value shape (the source
         population's shape without the ``part`` axis a split adds), or with one
@@ -92,6 +90,10 @@ def simulate(
         (:mod:`backends.reference.guards`) exceeds this (None: no limit).
     max_time_s : float or None
         Refuse a run whose estimated time exceeds this many seconds (None: no limit).
+    options : RunOptions, optional
+        All of ``mode``, ``arithmetic``, ``record_spikes``, ``out_of_range``,
+        ``max_memory_bytes`` and ``max_time_s`` as one record (it replaces those
+        arguments; :mod:`backends.reference.run_options`).
 
     Returns
     -------
@@ -139,17 +141,15 @@ def simulate(
     >>> r.mode, r.outputs["t"].tolist(), r.synaptic_events
     ('closed', [2.0], {'w': 2})
     """
-    from compiler.program import CompiledProgram
-
-    if isinstance(network, CompiledProgram):  # a whole chain: spiking and host segments
-        from backends.reference.program import run_program
-
-        if plan is not None:
-            raise SimulationError("a compiled program takes plans=program_plans(program) in "
-                                  "run_program(), not plan=")
-        return run_program(network, inputs, mode=mode, arithmetic=arithmetic,
-                           record_spikes=record_spikes, out_of_range=out_of_range,
-                           max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
+    if not isinstance(network, SpikingNetwork):
+        hint = ("run a compiled program with backends.reference.run_program(program, inputs)"
+                if hasattr(network, "segments") else "give a compiler.snn.SpikingNetwork")
+        raise SimulationError(f"simulate runs one spiking network, not a "
+                              f"{type(network).__name__}; {hint}")
+    if options is not None:
+        mode, arithmetic, record_spikes = options.mode, options.arithmetic, options.record_spikes
+        out_of_range, max_memory_bytes = options.out_of_range, options.max_memory_bytes
+        max_time_s = options.max_time_s
     if not isinstance(mode, str) or mode not in (*ENGINES, "auto"):
         raise SimulationError(f"network {network.name!r}: mode {mode!r} is not one of "
                               f"{(*ENGINES, 'auto')}")

@@ -1,0 +1,79 @@
+"""One record of how to run: engine, arithmetic, rasters, out-of-range policy, resource limits.
+
+:func:`backends.reference.simulate` runs one :class:`~compiler.snn.SpikingNetwork`;
+:func:`backends.reference.run_program` runs a whole compiled program and calls
+``simulate`` for each spiking segment.  Both take the same :class:`RunOptions`
+(``options=``), or its fields as keyword arguments; the program passes its record
+on to every segment (with the per-port policy a decoded upstream value needs).
+
+Examples
+--------
+>>> RunOptions(mode="closed").checked("network 'n'").mode
+'closed'
+>>> RunOptions(mode="fast").checked("network 'n'")
+Traceback (most recent call last):
+...
+ir.errors.SimulationError: network 'n': mode 'fast' is not one of ('step', 'closed', 'auto')
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
+from backends.reference.input_range import DEFAULT_POLICY
+from ir.errors import SimulationError
+from ir.limits import check_limit
+
+__all__ = ["ARITHMETICS", "MODES", "RunOptions"]
+
+#: The engines (``auto``: closed form where the network is eligible, else step).
+MODES = ("step", "closed", "auto")
+#: Number types of currents and membranes.
+ARITHMETICS = ("float64", "int64")
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How a network or a program runs.
+
+    Attributes
+    ----------
+    mode : {"step", "closed", "auto"}
+        ``step`` runs every time step; ``closed`` computes the spike steps of a
+        fire-once feed-forward network directly; ``auto`` picks ``closed`` when eligible.
+    arithmetic : {"float64", "int64"}
+        ``int64`` is fixed point with truncating decays (integer parameters).
+    record_spikes : bool
+        Keep full spike rasters.
+    out_of_range : {"reject", "warn", "clip"} or mapping of port to it
+        Input values above an encoder's range (:mod:`backends.reference.input_range`).
+    max_memory_bytes, max_time_s : int, float or None
+        Refuse a run whose estimate exceeds them (:mod:`backends.reference.guards`).
+    """
+
+    mode: str = "auto"
+    arithmetic: str = "float64"
+    record_spikes: bool = False
+    out_of_range: str | Mapping[str, str] = DEFAULT_POLICY
+    max_memory_bytes: int | None = MAX_MEMORY_BYTES
+    max_time_s: float | None = MAX_TIME_S
+
+    def checked(self, where: str) -> RunOptions:
+        """This record, its engine, arithmetic and limits checked (errors name ``where``).
+
+        Raises
+        ------
+        SimulationError
+            An unknown mode or arithmetic, or a limit that is not a positive finite
+            number or None.
+        """
+        if not isinstance(self.mode, str) or self.mode not in MODES:
+            raise SimulationError(f"{where}: mode {self.mode!r} is not one of {MODES}")
+        if not isinstance(self.arithmetic, str) or self.arithmetic not in ARITHMETICS:
+            raise SimulationError(f"{where}: arithmetic {self.arithmetic!r} is not one of "
+                                  f"{ARITHMETICS}")
+        check_limit("max_memory_bytes", self.max_memory_bytes, "bytes", where=where)
+        check_limit("max_time_s", self.max_time_s, "s", where=where)
+        return self
