@@ -141,7 +141,7 @@ def _write_program(program: CompiledProgram, folder: Path, extra: Mapping | None
             write_files(net_dir, files)
             digests.append(manifest[HASH_KEY])
         segments.append(_segment_entry(seg, digests))
-    report = program.records.get("report")
+    report = program.records.report
     target = program.target
     body = {
         "format": PROGRAM_FORMAT,

@@ -21,8 +21,8 @@ Examples
 ...     {"id": "a", "op": "input", "shape": {"range": 4}},
 ...     {"id": "o", "op": "output", "input": "a"}]})
 >>> p = CompiledProgram(graph=g)
->>> p.networks, p.records
-([], {})
+>>> p.networks, dict(p.records), p.records.report is None
+([], {}, True)
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from compiler.program_records import ProgramRecords
 from compiler.snn import SpikingNetwork
 from ir import Graph
 
@@ -73,9 +74,12 @@ class CompiledProgram:
         Spiking and host segments in execution order.
     options : dict
         The compile options used (JSON-able).
-    records : dict
-        One entry per pass that produced a record (``"calibrate"``, ``"lower"``,
-        ``"quantize"``, ``"placement"``, ``"report"`` …).
+    records : ProgramRecords
+        What the passes recorded, as typed fields (``records.calibration``,
+        ``records.motifs``, ``records.quantization``, ``records.splits``,
+        ``records.placement``, ``records.report``, ``records.timings`` …;
+        :mod:`compiler.program_records`); a mapping by pass name given here is
+        converted.
     target : object, optional
         The hardware profile compiled for.
     evaluators : dict, optional
@@ -91,10 +95,15 @@ class CompiledProgram:
     graph: Graph
     segments: list[Segment] = field(default_factory=list)
     options: dict[str, Any] = field(default_factory=dict)
-    records: dict[str, Any] = field(default_factory=dict)
+    records: ProgramRecords = field(default_factory=ProgramRecords)
     target: Any = None
     evaluators: dict[type, Any] = field(default_factory=dict)
     calibration_policy: Literal["static", "per-input"] = "static"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.records, ProgramRecords):  # a mapping by pass name
+            given, self.records = dict(self.records), ProgramRecords()
+            self.records.update(given)
 
     @property
     def networks(self) -> list[SpikingNetwork]:

@@ -154,7 +154,7 @@ def check_accuracy(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *
             raise
         return AccuracyCheck(n_frames=count or 1, skipped=" ".join(str(err).split()))
     reference = evaluate(graph, inputs, registry=program.evaluators)
-    motifs = (program.records.get("lower") or {}).get("motifs", {})
+    motifs = program.records.motifs
     out = []
     for seg in program.segments:
         if seg.kind != "spiking":

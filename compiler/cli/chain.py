@@ -185,7 +185,7 @@ def _warn_accuracy(program, calibration: dict, note: str) -> None:
     from compiler.cli.notes import GIVEN_NOTE
 
     check = check_accuracy(program, calibration)
-    program.records["accuracy"] = check
+    program.records.accuracy = check
     data = "the calibration data" if note == GIVEN_NOTE else "the synthetic calibration noise"
     if check.skipped:
         print(f"note: the accuracy check was skipped ({check.skipped})", file=sys.stderr)
@@ -201,15 +201,15 @@ def _cmd_compile(args: argparse.Namespace) -> int:
     program, note = _compile(args, args.target)
     folder = save_program(program, args.output, extra={
         "chain_file": str(args.chain), "calibration": note,
-        "accuracy": program.records["accuracy"].to_dict()})
-    report = program.records.get("report")
+        "accuracy": program.records.accuracy.to_dict()})
+    report = program.records.report
     totals = report.data["totals"] if report is not None else {}
     segments = [s.kind if s.kind == "spiking" else f"host:{s.node}" for s in program.segments]
     if args.json:
         print(json.dumps({"artifact": str(folder), "chain": program.graph.name,
                           "target": program.target.name, "segments": segments,
                           "totals": totals,
-                          "accuracy": program.records["accuracy"].to_dict()},
+                          "accuracy": program.records.accuracy.to_dict()},
                          sort_keys=True, default=str))
         return 0
     if not args.quiet:
@@ -239,7 +239,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
                                 f"{args.target})")
     else:
         program, note = _compile(args, args.target or "loihi2")
-    report = program.records.get("report")
+    report = program.records.report
     if report is None:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
     if args.core_map:

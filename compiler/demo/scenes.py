@@ -234,7 +234,7 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
         report.sft_rmse = modulus_rmse(np.asarray(result.values[spiking_dop]).transpose(perm),
                                        np.asarray(exact[spiking_dop]).transpose(perm),
                                        drop_bin0=False)
-        program_report = program.records.get("report")
+        program_report = program.records.report
         report.resources = _resources(program_report)
         arrays.spiking_db, arrays.spiking_mask = _db(s_power), s_mask
         arrays.report = program_report

@@ -98,7 +98,7 @@ def run_pipeline(passes: Iterable[Pass], ctx: CompileContext,
     """
     if ctx.evaluators:
         program.evaluators = dict(ctx.evaluators)
-    timings = program.records.setdefault("timings", {})
+    timings = program.records.timings
     for p in passes:
         ctx.progress(p.name, "start")
         start = time.perf_counter()

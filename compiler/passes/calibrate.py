@@ -243,7 +243,7 @@ class Calibrate(Pass):
                      NodeCalibration(**{**c.__dict__, "normalize_axes": norm[n]})
                      for n, c in nodes.items()}
             source, n_frames = ("bounds" if bounds else "none"), 0
-        program.records[self.name] = Calibration(policy=policy, headroom=headroom,
+        program.records.calibration = Calibration(policy=policy, headroom=headroom,
                                                  source=source, nodes=nodes, n_frames=n_frames)
         log.info("policy %s, ranges from %s (%d frame(s)), %d node(s) ranged, "
                  "headroom %g", policy, source, n_frames, len(nodes), headroom)

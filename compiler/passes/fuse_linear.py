@@ -93,7 +93,7 @@ class FuseLinear(Pass):
         if record:
             graph.verify()
             program.graph = graph
-        program.records[self.name] = record
+        program.records.rewrites = record
         return program
 
     def _rewrite_once(self, graph: Graph, record: list[dict[str, Any]]) -> Graph | None:

@@ -50,18 +50,18 @@ class Lower(Pass):
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         registry = ctx.lowering or default_registry()
-        calibration = program.records.get("calibrate") or {}
-        split = program.records.get("static-split") or []
+        calibration = program.records.calibration or {}
+        split = program.records.static_splits
         lctx = LoweringContext(graph=program.graph, registry=registry, motifs=dict(self.motifs),
                                settings={type(s): s for s in self.settings},
                                calibration=getattr(calibration, "nodes", calibration),
                                target=ctx.target, host_pinned=frozenset(host_nodes(split)),
                                moving=frozenset(n for r in split for n in r["moving"]))
         program.segments = lower_graph(lctx)
-        program.records[self.name] = {
+        program.records.lowering = {
             "motifs": {n: lctx.motif_for(n) for n in program.graph.topological_order()},
         }
-        for node, motif in program.records[self.name]["motifs"].items():
+        for node, motif in program.records.motifs.items():
             log.debug("node %r -> motif %s", node, motif)
         log.info("%d spiking segment(s), %d host node(s)", len(program.networks),
                  len(program.host_nodes))

@@ -256,7 +256,7 @@ class Place(Pass):
         profile = load_profile(ctx.target)
         mode = self.repetitions
         networks = program.networks
-        splits = program.records.get("split") or split_program(networks, profile, mode)
+        splits = program.records.splits or split_program(networks, profile, mode)
         cands = multiplex_candidates(networks, profile)
         while True:
             try:
@@ -272,6 +272,6 @@ class Place(Pass):
                 log.info("the blocks did not pack (%s); time-multiplexing %d stage(s)",
                          err, n + 1)
                 splits = split_program(networks, profile, mode, start=n + 1)
-        program.records["split"] = splits
-        program.records["placement"] = placement
+        program.records.splits = splits
+        program.records.placement = placement
         return program

@@ -335,5 +335,5 @@ class Quantize(Pass):
                 records.append(rec)
             segments.append(seg)
         program.segments = segments
-        program.records[self.name] = records
+        program.records.quantization = records
         return program

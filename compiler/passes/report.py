@@ -46,7 +46,7 @@ class ReportPass(Pass):
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         if program.target is None and ctx.target is not None:
             program.target = ctx.target
-        program.records[self.name] = build_report(
+        program.records.report = build_report(
             program, frame_rate_hz=self.frame_rate_hz, real_bits=int(self.real_bits),
             n_angle_bins=self.n_angle_bins)
         return program

@@ -279,5 +279,5 @@ class Split(Pass):
         profile = load_profile(ctx.target)
         mode = self.repetitions
         ctx.progress(self.name, f"{len(program.networks)} network(s), repetitions={mode}")
-        program.records[self.name] = split_program(program.networks, profile, mode)
+        program.records.splits = split_program(program.networks, profile, mode)
         return program

@@ -202,5 +202,5 @@ class StaticSplit(Pass):
                 graph, rec = _split(graph, dop, *found)
                 record.append(rec)
         program.graph = graph
-        program.records[self.name] = record
+        program.records.static_splits = record
         return program

@@ -50,7 +50,7 @@ def _instances(net, proj) -> int:
 def format_rows(program) -> list[dict]:
     """Rows ``{node, item, mechanism, detail, cost}`` for the report (see the module doc)."""
     profile = load_profile(program.target)
-    records = program.records.get("quantize") or []
+    records = program.records.quantization
     rows: list[dict] = []
     for k, net in enumerate(program.networks):
         rec = records[k].projections if k < len(records) else {}
@@ -121,7 +121,7 @@ def format_rows(program) -> list[dict]:
 def _split_rows(program) -> list[dict]:
     types = program.graph.infer_types()
     rows = []
-    for rec in program.records.get("static-split") or []:
+    for rec in program.records.static_splits:
         mean, *stages, static = rec["static"]
         adc = types[rec["input"]]
         macs = adc.size + types[rec["moving_input"]].size  # the chirp mean and x - mean

@@ -43,7 +43,7 @@ def static_cost(program) -> dict[str, Any]:
         "cores": None,
         "host_nodes": len(program.host_nodes),
     }
-    report = program.records.get("report")
+    report = program.records.report
     if report is not None:
         totals = report.data.get("totals", {})
         cost["cores"] = totals.get("cores")
