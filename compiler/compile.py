@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from compiler.guards import check_compile, limits_from_options
+from compiler.compile_guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
 from compiler.lowering.options import MOTIF_OPTION_MODELS, motif_settings
@@ -209,7 +209,7 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
     BudgetError
         The program does not fit the target (naming the node, budget and amount), or
         its estimated compile memory or time exceeds the options ``max_memory_bytes``
-        / ``max_time_s`` (:mod:`compiler.guards`; checked before anything is built).
+        / ``max_time_s`` (:mod:`compiler.compile_guards`; checked before anything is built).
     """
     if isinstance(graph, (str, Path)):
         graph = Graph.from_yaml(Path(graph))

@@ -17,7 +17,7 @@ engines agree bit for bit.
 Examples
 --------
 >>> import numpy as np
->>> q_levels, q = quantize(np.array([[1.0, -0.5], [0.26, 0.0]]), bits=3)
+>>> q_levels, q = quantize_matrix(np.array([[1.0, -0.5], [0.26, 0.0]]), bits=3)
 >>> q_levels.tolist(), q
 ([[3.0, -2.0], [1.0, 0.0]], 0.3333333333333333)
 """
@@ -28,7 +28,8 @@ import numpy as np
 
 from ir.errors import CompileError
 
-__all__ = ["EXACT_WEIGHT_BITS", "quantize", "rint_feedback", "rint_keep_sums", "weight_bits_of"]
+__all__ = ["EXACT_WEIGHT_BITS", "quantize_matrix", "rint_feedback", "rint_keep_sums",
+           "weight_bits_of"]
 
 #: Bits used when no target width is given (see the module docstring).
 EXACT_WEIGHT_BITS = 24
@@ -56,7 +57,7 @@ def weight_bits_of(option: object, *, node: str = "") -> int:
     return int(option)
 
 
-def quantize(m: np.ndarray, bits: int) -> tuple[np.ndarray, float]:
+def quantize_matrix(m: np.ndarray, bits: int) -> tuple[np.ndarray, float]:
     """Integer levels ``Q`` (as float64) and the scale ``q`` with ``M ≈ q·Q``.
 
     Parameters
@@ -80,7 +81,7 @@ def quantize(m: np.ndarray, bits: int) -> tuple[np.ndarray, float]:
 
     Examples
     --------
-    >>> levels, q = quantize(np.array([0.5, -1.0]), bits=8)
+    >>> levels, q = quantize_matrix(np.array([0.5, -1.0]), bits=8)
     >>> levels.tolist(), q * 127
     ([64.0, -127.0], 1.0)
     """

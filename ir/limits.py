@@ -2,7 +2,7 @@
 computed from their types before anything is allocated.
 
 :func:`check_limit` is the one rule for ``max_memory_bytes``, ``max_time_s`` and
-``raster_limit_bytes`` everywhere (compile options, :func:`~compiler.guards.check_compile`,
+``raster_limit_bytes`` everywhere (compile options, :func:`~compiler.compile_guards.check_compile`,
 ``simulate``, ``run_program``): a positive finite number, or ``None`` for no limit.  A NaN
 would switch a guard off (every comparison with NaN is false); a string would fail deep
 inside it.

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from backends.reference import simulate
-from compiler.classifier import build_plan, classify, load_weights, save_weights
+from compiler.classifier import build_layer_plan, classify, load_weights, save_weights
 from compiler.classifier.default import ROI_SHAPE, default_classifier
 from compiler.classifier.plan import conv_matrix
 from compiler.compile import compile_graph
@@ -157,6 +157,6 @@ def test_table3_row_by_hand(tmp_path) -> None:
     row = classifier_row(net, "cls", frames=4)
     # inputs 8 x 6; neurons 3 x 4 x 3 conv + 3 x 2 x 1 pool + 5 + 3 = 50
     assert (row.inputs, row.neurons, row.steps_per_frame) == (48, 50, 1)
-    conv = build_plan(op, w, (8, 6))
+    conv = build_layer_plan(op, w, (8, 6))
     expect = sum(p.matrix.nnz for p in conv) + 25
     assert row.synapses == expect

@@ -9,7 +9,7 @@ import pytest
 from backends.reference import run_program, simulate
 from backends.reference.guards import MAX_MEMORY_BYTES, estimate_simulation, frames_in
 from compiler.compile import EXTRA_OPTIONS, compile_graph
-from compiler.guards import check_compile, estimate_compile, limits_from_options
+from compiler.compile_guards import check_compile, estimate_compile, limits_from_options
 from compiler.snn import (
     Encoder,
     LatencyCode,

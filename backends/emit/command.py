@@ -60,7 +60,7 @@ def run_emit(source: str | Path, out_dir: str | Path, *, target: str = "loihi2",
         return EMITTERS[backend](path, out_dir, name=name)
     from compiler.calibration import synthetic_inputs
     from compiler.compile import compile_graph
-    from compiler.guards import check_compile
+    from compiler.compile_guards import check_compile
     from ir import Graph
 
     graph = Graph.from_yaml(path)

@@ -3,7 +3,7 @@ r"""Fitting the classifier models: Adam + cross-entropy, best validation epoch, 
 :func:`fit` trains any model of :mod:`compiler.classifier.train` (SNN, CNN, ANN) on ROI
 sequences; for an SNN it can add the activity regulariser (its differentiable synaptic
 events, ``model.last_events``) and keep only epochs within an events budget.
-:func:`evaluate`, :func:`predict` and :func:`accuracy` run a model without gradients.
+:func:`evaluate_model`, :func:`predict` and :func:`accuracy` run a model without gradients.
 Everything is seeded and runs on the CPU (extra ``train``: torch).
 """
 
@@ -17,7 +17,7 @@ import numpy as np
 
 from compiler.classifier.train import torch_module
 
-__all__ = ["FitResult", "accuracy", "evaluate", "fit", "predict"]
+__all__ = ["FitResult", "accuracy", "evaluate_model", "fit", "predict"]
 
 
 @dataclass
@@ -96,7 +96,7 @@ def fit(model: Any, train: tuple[np.ndarray, np.ndarray], val: tuple[np.ndarray,
             opt.step()
             total += float(loss.detach()) * len(idx)
         sched.step()
-        acc, events = evaluate(model, *val)
+        acc, events = evaluate_model(model, *val)
         history.append((total / len(order), acc, events))
         if log is not None:
             log(f"epoch {epoch:3d} loss {total / len(order):.4f} val {acc:.4f} "
@@ -111,7 +111,7 @@ def fit(model: Any, train: tuple[np.ndarray, np.ndarray], val: tuple[np.ndarray,
                      val_events=events)
 
 
-def evaluate(model: Any, x: np.ndarray, y: np.ndarray,
+def evaluate_model(model: Any, x: np.ndarray, y: np.ndarray,
              batch_size: int = 256) -> tuple[float, float]:
     """Accuracy and mean synaptic events per sample (``nan`` if the model counts none)."""
     torch = torch_module()

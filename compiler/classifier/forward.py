@@ -2,7 +2,7 @@ r"""The numpy forward pass of the classifier: the reference semantics of the ``c
 
 One step per frame ``t``. The encoding turns frame ``t`` into the first layer's input
 (``levels``: binary channels ``[x > level_k]``; ``real``: ``scale · x``); every
-population of :func:`compiler.classifier.plan.build_plan` then updates in order, in the
+population of :func:`compiler.classifier.plan.build_layer_plan` then updates in order, in the
 same step (the spiking network's zero-delay projections):
 
 .. math::
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.classifier.plan import LayerPlan, build_plan
+from compiler.classifier.plan import LayerPlan, build_layer_plan
 from ir.ops.classify import Classifier
 
 __all__ = ["ForwardResult", "classify", "encode_frames", "run_plan"]
@@ -164,8 +164,8 @@ def classify(op: Classifier, weights: Mapping[str, np.ndarray], rois: np.ndarray
     Raises
     ------
     IRError
-        For weights that do not fit the op (see :func:`build_plan`).
+        For weights that do not fit the op (see :func:`build_layer_plan`).
     """
     rois = np.asarray(rois, dtype=np.float64)
-    plans = build_plan(op, weights, rois.shape[-2:], node_id)
+    plans = build_layer_plan(op, weights, rois.shape[-2:], node_id)
     return run_plan(plans, encode_frames(op, rois), binary_input=op.encoding.kind == "levels")

@@ -22,7 +22,7 @@ Examples
 >>> op = Classifier(num_classes=2, weights="w.npz", encoding=LevelsEncoding(levels=(1.0,)),
 ...                 layers=(Conv2d(channels=1, kernel=(2, 2)), Integrator(units=2)))
 >>> w = {"layers.0.weight": np.ones((1, 1, 2, 2)), "layers.1.weight": np.ones((2, 4))}
->>> plans = build_plan(op, w, (3, 3))
+>>> plans = build_layer_plan(op, w, (3, 3))
 >>> [(p.kind, p.matrix.shape, p.matrix.nnz) for p in plans]
 [('spiking', (9, 4), 16), ('integrator', (4, 2), 8)]
 """
@@ -39,7 +39,7 @@ import scipy.sparse as sp
 from compiler.snn import NeuronParams, Phase
 from ir.ops.classify import LIF, Classifier, Conv2d, Integrator, Pool
 
-__all__ = ["LayerPlan", "build_plan", "conv_matrix", "pool_matrix", "neuron_params"]
+__all__ = ["LayerPlan", "build_layer_plan", "conv_matrix", "pool_matrix", "neuron_params"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,7 +143,7 @@ def pool_matrix(in_shape: tuple[int, int, int], size: tuple[int, int],
     return m, (c, oh, ow)
 
 
-def build_plan(op: Classifier, weights: Mapping[str, np.ndarray], map_shape: tuple[int, int],
+def build_layer_plan(op: Classifier, weights: Mapping[str, np.ndarray], map_shape: tuple[int, int],
                node_id: str = "classifier") -> list[LayerPlan]:
     """The populations of the classifier (see the module docstring).
 

@@ -195,7 +195,7 @@ def fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[np.ndarray]:
 
     Entry ``k`` has the shape of layer ``k``'s output features (zeros for layers whose
     output is not a population: an ``avg`` pool, the integrator) and counts the wired
-    synapses of the next population in :func:`compiler.classifier.plan.build_plan`
+    synapses of the next population in :func:`compiler.classifier.plan.build_layer_plan`
     (all-ones weights) that a spike of that neuron drives. A recurrent layer's spikes also
     reach its own ``units`` neurons one step later (not included here).
 
@@ -207,11 +207,11 @@ def fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[np.ndarray]:
     >>> [f.tolist() for f in fan_out(op, (3, 1))]
     [[[[2.0], [2.0]], [[2.0], [2.0]], [[2.0], [2.0]]], [0.0, 0.0], [[[3.0], [6.0], [3.0]]]]
     """
-    from compiler.classifier.plan import build_plan
+    from compiler.classifier.plan import build_layer_plan
 
     shapes = op.feature_shapes("classifier", map_shape)
     ones = {k: np.ones(v) for k, v in op.weight_shapes("classifier", map_shape).items()}
-    plans = build_plan(op, ones, map_shape)
+    plans = build_layer_plan(op, ones, map_shape)
     out = [np.zeros(shape) for shape in shapes[1:]] + [np.zeros(shapes[0])]
     for p in plans:
         prev = max((q.index for q in plans if q.index < p.index), default=-1)

@@ -137,7 +137,7 @@ def _compile(args: argparse.Namespace, target: str | None):
     from compiler.calibration import synthetic_inputs
     from compiler.cli.notes import GIVEN_NOTE, SYNTHETIC_NOTE
     from compiler.compile import compile_graph, default_pipeline
-    from compiler.guards import check_compile, limits_from_options
+    from compiler.compile_guards import check_compile, limits_from_options
     from compiler.progress import make_progress
     from ir import Graph
 

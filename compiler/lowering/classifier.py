@@ -10,7 +10,7 @@ and a ``levels`` encoding with one reference level ``L``:
    frame ``f``, into IF neurons with threshold 1 and no memory (``du = dv = 1``), so input
    neuron ``(map0, map1)`` spikes at step ``f`` iff
    ``x[f, map0, map1] > L`` — frame ``f`` arrives at step ``f``;
-3. one population ``<node>/l<i>`` per layer of :func:`compiler.classifier.plan.build_plan`
+3. one population ``<node>/l<i>`` per layer of :func:`compiler.classifier.plan.build_layer_plan`
    with axes ``(batch..., l<i>_c, l<i>_y, l<i>_x)`` (maps) or ``(batch..., l<i>_n)``, fed by a
    sparse :class:`~compiler.snn.MatrixProjection` of the plan's matrix (the convolutions
    unrolled: a stencil cannot mix channels or stride), shared over the batch axes; a
@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from compiler.classifier.plan import LayerPlan, build_plan
+from compiler.classifier.plan import LayerPlan, build_layer_plan
 from compiler.classifier.weights import load_weights
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.registry import LoweringRegistry
@@ -94,7 +94,7 @@ def lower_classifier(ctx: LoweringContext, node: str, op: Classifier,
     (value,) = inputs
     t = ctx.types[value.node]
     map_shape = (t.axes[op.map_axes[0]], t.axes[op.map_axes[1]])
-    plans = build_plan(op, load_weights(op, map_shape, node), map_shape, node)
+    plans = build_layer_plan(op, load_weights(op, map_shape, node), map_shape, node)
     batch = {a: t.axes[a] for a in op.batch_axes(t)}
     frames = t.axes[op.time_axis]
     code = LatencyCode(t_min=0, t_max=1, x_min=level, x_max=level + 1.0, rounding="floor")

@@ -59,7 +59,7 @@ import numpy as np
 
 from compiler.calibration import Calibration, NodeCalibration, measure, second_moment
 from compiler.calibration_bounds import propagate_bounds
-from compiler.guards import MAX_MEMORY_BYTES
+from compiler.compile_guards import MAX_MEMORY_BYTES
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
 from compiler.snn.coding import normalize_values

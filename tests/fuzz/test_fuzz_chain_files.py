@@ -23,7 +23,7 @@ from hypothesis import given, note
 from hypothesis import strategies as st
 from test_ir_properties import chains
 
-from compiler.guards import estimate_compile
+from compiler.compile_guards import estimate_compile
 from ir import Graph
 from ir.interpreter import evaluate
 from ir.ops import OP_REGISTRY
