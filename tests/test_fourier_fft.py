@@ -16,6 +16,7 @@ from compiler.lowering.dft_fft import (
     radix_plan,
     sfft_resources,
 )
+from compiler.lowering.options import motif_settings
 from ir import Graph
 from ir.errors import CompileError
 from ir.interpreter import evaluate
@@ -31,9 +32,9 @@ def _graph(n: int, reps: int = 1, **dft) -> Graph:
 
 
 def _lower(g: Graph, steps: int, calibration: dict | None = None, **options):
-    ctx = LoweringContext.from_options(g, default_registry(), {
-        "motifs": {"dft": "time-fft"}, "time_steps": steps, **options},
-        calibration=calibration or {})
+    ctx = LoweringContext(graph=g, registry=default_registry(), motifs={"dft": "time-fft"},
+                          settings=motif_settings({"time_steps": steps, **options}),
+                          calibration=calibration or {})
     return lower_graph(ctx)[0].network
 
 

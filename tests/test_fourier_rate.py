@@ -13,6 +13,7 @@ from compiler.compile import lower_pass
 from compiler.lowering import LoweringContext, default_registry, lower_graph
 from compiler.lowering.dft_common import modulus_rmse, real_weights
 from compiler.lowering.dft_rate import worst_case_bound
+from compiler.lowering.options import motif_settings
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
 from compiler.program import CompiledProgram
@@ -31,8 +32,8 @@ def _graph(n: int, reps: int = 1) -> Graph:
 
 
 def _lower(g: Graph, steps: int, **options):
-    ctx = LoweringContext.from_options(g, default_registry(), {
-        "motifs": {"dft": "rate"}, "time_steps": steps, **options})
+    ctx = LoweringContext(graph=g, registry=default_registry(), motifs={"dft": "rate"},
+                          settings=motif_settings({"time_steps": steps, **options}))
     return lower_graph(ctx)
 
 

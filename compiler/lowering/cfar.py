@@ -50,7 +50,8 @@ Examples
 ...      "k": 3, "alpha": 2.0},
 ...     {"id": "o", "op": "output", "input": "det"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_cfar(reg)
->>> ctx = LoweringContext.from_options(g, reg, {"cfar_range": (0.1, 10.0)})
+>>> from compiler.lowering.options import motif_settings
+>>> ctx = LoweringContext(graph=g, registry=reg, settings=motif_settings({"cfar_range": (0.1, 10)}))
 >>> net = lower_graph(ctx)[0].network
 >>> net.n_neurons, net.n_synapse_instances(), net.meta["cfar"]["det"]["code"]["kind"]
 (16, 80, 'log')

@@ -22,7 +22,6 @@ from typing import Any, TypeVar
 from pydantic import BaseModel
 
 from compiler.lowering.builder import NetworkBuilder
-from compiler.lowering.options import motif_settings
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.values import HostValue, SpikeValue, Value
 from compiler.program import Segment
@@ -93,25 +92,6 @@ class LoweringContext:
 
     def __post_init__(self) -> None:
         self.types = self.graph.infer_types()
-
-    @classmethod
-    def from_options(cls, graph: Graph, registry: LoweringRegistry,
-                     options: Mapping[str, Any], **fields: Any) -> LoweringContext:
-        """A context whose motifs and settings come from compile options (tests, doctests).
-
-        Examples
-        --------
-        >>> from compiler.lowering import default_registry
-        >>> from compiler.lowering.options import CfarOptions
-        >>> g = Graph.from_dict({"name": "x", "nodes": [
-        ...     {"id": "a", "op": "input", "shape": {"range": 4}},
-        ...     {"id": "o", "op": "output", "input": "a"}]})
-        >>> ctx = LoweringContext.from_options(g, default_registry(), {"time_steps": 32})
-        >>> ctx.settings_of(CfarOptions).time_steps
-        32
-        """
-        return cls(graph=graph, registry=registry, motifs=dict(options.get("motifs") or {}),
-                   settings=motif_settings(options), **fields)
 
     def settings_of(self, model: type[_Model]) -> _Model:
         """The typed options of one motif family (its defaults when none were given)."""

@@ -56,8 +56,9 @@ Examples
 ...     {"id": "f", "op": "dft", "input": "x", "axis": "sample", "out_axis": "bin"},
 ...     {"id": "o", "op": "output", "input": "f"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_rate(reg)
->>> ctx = LoweringContext.from_options(g, reg, {"motifs": {"dft": "rate"},
-...                                             "time_steps": 2000})
+>>> from compiler.lowering.options import motif_settings
+>>> ctx = LoweringContext(graph=g, registry=reg, motifs={"dft": "rate"},
+...                       settings=motif_settings({"time_steps": 2000}))
 >>> net = lower_graph(ctx)[0].network
 >>> net.population["f/out"].shape, net.n_steps
 ({'bin': 8, 'part': 4}, 2000)

@@ -62,7 +62,8 @@ def build_report(program, *, sim_results: Sequence | None = None,
     sim_results : sequence of SimResult, optional
         One per network, for measured spikes and synaptic events.
     frame_rate_hz : float, optional
-        Frames per second (default ``program.options["frame_rate_hz"]`` or 10).
+        Frames per second (default 10; the ``report`` pass gives the compile option
+        ``frame_rate_hz``).
     real_bits : int
         Bits per real value of the frame I/O (complex: twice).
     n_angle_bins : int, optional
@@ -83,7 +84,7 @@ def build_report(program, *, sim_results: Sequence | None = None,
     [('raw_cube', 262.1), ('rd_map', 32.8), ('ra_map', 131.1)]
     """
     profile = load_profile(program.target)
-    rate = frame_rate_hz or float(program.options.get("frame_rate_hz", 10.0))
+    rate = float(frame_rate_hz or 10.0)  # the ReportPass gives the option frame_rate_hz
     networks = program.networks
     splits = program.records.splits or [None] * len(networks)
     placement = program.records.placement
