@@ -34,10 +34,12 @@ same column (−1 if none),
 
 .. math:: \text{entries}(B) = \sum_{i \in B,\ \text{prev}_i < lo(B)} \text{nnz}(W_{:, p_i}).
 
-Fan-in lines need the reached sources themselves (:func:`~compiler.hardware.reach.reach_sweep`).
-Models are remembered per network (while it lives) and population, and remember
-the demands they measured: networks and projections are treated as immutable
-once split.
+One block of all the neurons (every population on ``unbounded``) needs only totals,
+summed over chunks with a mark per matrix column, in memory independent of :math:`N`;
+the prefix sums (some 50 bytes per neuron) are built when blocks are cut.  Fan-in lines
+need the reached sources (:func:`~compiler.hardware.reach.reach_sweep`).  Models are
+remembered per network (while it lives) and population, and remember the demands
+they measured: networks and projections are treated as immutable once split.
 
 Examples
 --------
@@ -56,6 +58,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from weakref import WeakKeyDictionary
 
 import numpy as np
@@ -90,6 +93,9 @@ def _cum(counts: np.ndarray) -> np.ndarray:
 class DemandModel:
     """The per-neuron quantities of one population (or one instance of it), computed once.
 
+    One block of all the neurons is measured by totals over chunks of neurons; the
+    per-neuron prefix sums are built when blocks are first cut.
+
     Parameters
     ----------
     network : SpikingNetwork
@@ -106,62 +112,109 @@ class DemandModel:
                  neurons: np.ndarray | None = None, *, shared_weights: bool) -> None:
         pops = network.population
         tgt = pops[population]
-        n = tgt.size if neurons is None else len(neurons)
         incoming = [projection_info(p, pops[p.source], tgt) for p in network.incoming(population)]
         # no reference to the network: models are remembered per network, weakly
-        self._pops, self._tgt, self._incoming = pops, tgt, incoming
+        self._pops, self._tgt, self._incoming, self._neurons = pops, tgt, incoming, neurons
+        self._n = tgt.size if neurons is None else len(neurons)
         self.shared_weights = shared_weights
         outgoing: dict[str, list[ProjectionInfo]] = {}
         for p in network.projections:
             if p.source == population:
                 outgoing.setdefault(p.target, []).append(projection_info(p, tgt, pops[p.target]))
-        degree = [(i.proj.axes, stencil_degree_map(i.proj, tgt, incoming=True))
-                  for i in incoming if i.proj.kind == "stencil"]
-        matrices = [i for i in incoming if i.proj.kind == "matrix"]
-        fan_out, unshared = np.zeros(n, np.int64), np.zeros(n, np.int64)
-        columns = [np.zeros(n, np.int64) for _ in matrices]
-        for lo in range(0, n, _CHUNK):
-            pos = np.arange(lo, min(n, lo + _CHUNK), dtype=np.int64)
-            flat = pos if neurons is None else neurons[pos]
-            for infos in outgoing.values():
-                has = np.zeros(flat.size, bool)
-                for info in infos:
-                    has |= has_synapse_out(info, tgt, flat)
-                fan_out[pos] += has
-            for axes, deg in degree:
-                unshared[pos] += deg[tuple(coords(tgt, flat, axes))]
-            for info, col in zip(matrices, columns, strict=True):
-                produce = info.proj.produce
-                col[pos] = ravel(coords(tgt, flat, produce), [tgt.shape[a] for a in produce])
-                unshared[pos] += info.indeg[col[pos]]
-        self._fan_out, self._unshared = _cum(fan_out), _cum(unshared)
+        self._outgoing = list(outgoing.values())
+        self._degree = [(i.proj.axes, stencil_degree_map(i.proj, tgt, incoming=True))
+                        for i in incoming if i.proj.kind == "stencil"]
+        self._matrices = [i for i in incoming if i.proj.kind == "matrix"]
         self._kernel_taps = sum(len(i.offsets) for i in incoming if i.proj.kind == "stencil")
-        once = np.zeros(n, np.int64)  # shared: columns charged in whatever block holds them
-        self._repeats = []            # (position, previous position with its column, nnz)
-        for info, col in zip(matrices, columns, strict=True):
-            order = np.argsort(col, kind="stable")
-            same = col[order[1:]] == col[order[:-1]]
-            first = order[np.concatenate([[True], ~same])]
-            once[first] += info.indeg[col[first]]
-            pos, prev = order[1:][same], order[:-1][same]
-            self._repeats.append((pos, prev, info.indeg[col[pos]]))
-        self._once = _cum(once)
+        self._whole: tuple[int, int, int] | None = None  # one block: fan-out, unshared, shared
+        self._prefix: dict | None = None                 # per-neuron prefix sums, when cut
         self._fan_in: dict[bytes, np.ndarray] = {}
         self._demands: dict[tuple, Demand] = {}
 
-    def _totals(self, cum: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    def _chunks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]]:
+        """Per chunk of positions: fan-out lines, unshared entries, each matrix's columns."""
+        tgt, neurons = self._tgt, self._neurons
+        for lo in range(0, self._n, _CHUNK):
+            pos = np.arange(lo, min(self._n, lo + _CHUNK), dtype=np.int64)
+            flat = pos if neurons is None else neurons[pos]
+            fan_out, unshared = np.zeros(pos.size, np.int64), np.zeros(pos.size, np.int64)
+            for infos in self._outgoing:
+                has = np.zeros(flat.size, bool)
+                for info in infos:
+                    has |= has_synapse_out(info, tgt, flat)
+                fan_out += has
+            for axes, deg in self._degree:
+                unshared += deg[tuple(coords(tgt, flat, axes))]
+            cols = []
+            for info in self._matrices:
+                produce = info.proj.produce
+                cols.append(ravel(coords(tgt, flat, produce), [tgt.shape[a] for a in produce]))
+                unshared += info.indeg[cols[-1]]
+            yield pos, fan_out, unshared, cols
+
+    def _whole_totals(self) -> tuple[int, int, int]:
+        """Fan-out lines, unshared and shared entries of one block of all the neurons."""
+        if self._whole is None:
+            fan_out = unshared = 0
+            seen = [np.zeros(info.indeg.size, bool) for info in self._matrices]
+            for _, f, u, cols in self._chunks():
+                fan_out, unshared = fan_out + int(f.sum()), unshared + int(u.sum())
+                for s, c in zip(seen, cols, strict=True):
+                    s[c] = True
+            shared = self._kernel_taps * (self._n > 0) + sum(
+                int(info.indeg[s].sum()) for info, s in zip(self._matrices, seen, strict=True))
+            self._whole = fan_out, unshared, shared
+        return self._whole
+
+    def _prefixes(self) -> dict:
+        """Prefix sums of fan-out lines, unshared and first-charged shared entries, and the
+        repeated columns ``(position, previous position with its column, nnz)`` per matrix."""
+        if self._prefix is None:
+            n = self._n
+            fan_out, unshared = np.zeros(n, np.int64), np.zeros(n, np.int64)
+            columns = [np.zeros(n, np.int64) for _ in self._matrices]
+            for pos, f, u, cols in self._chunks():
+                fan_out[pos], unshared[pos] = f, u
+                for col, c in zip(columns, cols, strict=True):
+                    col[pos] = c
+            once = np.zeros(n, np.int64)  # shared: columns charged in whatever block holds them
+            repeats = []
+            used = zip(self._matrices, columns, strict=True) if self.shared_weights else ()
+            for info, col in used:  # unshared entries need neither
+                order = np.argsort(col, kind="stable")
+                same = col[order[1:]] == col[order[:-1]]
+                first = order[np.concatenate([[True], ~same])]
+                once[first] += info.indeg[col[first]]
+                pos, prev = order[1:][same], order[:-1][same]
+                repeats.append((pos, prev, info.indeg[col[pos]]))
+            self._prefix = {"fan_out": _cum(fan_out), "unshared": _cum(unshared),
+                            "once": _cum(once), "repeats": repeats}
+        return self._prefix
+
+    def _is_whole(self, blocks: Blocks) -> bool:
+        return blocks.n_blocks == 1 and blocks.edges[0] == 0 and blocks.edges[1] == self._n
+
+    def _totals(self, name: str, blocks: Blocks) -> np.ndarray:
+        cum, edges = self._prefixes()[name], blocks.edges
         return cum[edges[1:]] - cum[edges[:-1]]
+
+    def fan_out(self, blocks: Blocks) -> np.ndarray:
+        """Fan-out lines per block."""
+        if self._is_whole(blocks):
+            return np.array([self._whole_totals()[0]], np.int64)
+        return self._totals("fan_out", blocks)
 
     def entries(self, blocks: Blocks) -> np.ndarray:
         """Stored synapse entries per block."""
-        edges = blocks.edges
+        if self._is_whole(blocks):
+            return np.array([self._whole_totals()[2 if self.shared_weights else 1]], np.int64)
         if not self.shared_weights:
-            return self._totals(self._unshared, edges)
+            return self._totals("unshared", blocks)
         nb = blocks.n_blocks
-        out = self._totals(self._once, edges) + self._kernel_taps * (blocks.sizes > 0)
-        if self._repeats:
-            blk = blocks.block_of(np.arange(self._once.size - 1))
-            for pos, prev, nnz in self._repeats:
+        out = self._totals("once", blocks) + self._kernel_taps * (blocks.sizes > 0)
+        if repeats := self._prefixes()["repeats"]:
+            blk = blocks.block_of(np.arange(self._n))
+            for pos, prev, nnz in repeats:
                 b = blk[pos]
                 new = (b != blk[prev]) & (b >= 0) & (b < nb)
                 out += np.bincount(b[new], weights=nnz[new], minlength=nb).astype(np.int64)
@@ -174,14 +227,18 @@ class DemandModel:
             self._fan_in[key] = sweep_infos(self._pops, self._tgt, self._incoming, blocks)[0]
         return self._fan_in[key]
 
+    def _stack(self, blocks: Blocks, lines: np.ndarray, entries: np.ndarray,
+               bits_per_synapse: int) -> np.ndarray:
+        return np.stack([blocks.sizes, lines, self.fan_out(blocks), entries * bits_per_synapse],
+                        axis=1).astype(np.int64)
+
     def amounts(self, blocks: Blocks, *, bits_per_synapse: int, fan_in: bool) -> np.ndarray:
         """Per block ``neurons, input_axons, output_axons, synapse_bits`` (int64, ``(n, 4)``).
 
         Without ``fan_in`` the ``input_axons`` column is 0.
         """
         lines = self.fan_in(blocks) if fan_in else np.zeros(blocks.n_blocks, np.int64)
-        return np.stack([blocks.sizes, lines, self._totals(self._fan_out, blocks.edges),
-                         self.entries(blocks) * bits_per_synapse], axis=1).astype(np.int64)
+        return self._stack(blocks, lines, self.entries(blocks), bits_per_synapse)
 
     def demand(self, blocks: Blocks, *, bits_per_synapse: int, reach: bool) -> Demand:
         """The :class:`Demand` of ``blocks``, with fan-in and reached pairs when ``reach``.
@@ -196,9 +253,7 @@ class DemandModel:
             lines = np.zeros(blocks.n_blocks, np.int64)
             if reach and key[0] in self._fan_in:
                 lines = self._fan_in[key[0]]
-            amounts = np.stack([blocks.sizes, lines,
-                                self._totals(self._fan_out, blocks.edges),
-                                entries * bits_per_synapse], axis=1).astype(np.int64)
+            amounts = self._stack(blocks, lines, entries, bits_per_synapse)
             pending = None
             if reach:
                 def pending() -> tuple[np.ndarray, dict]:
