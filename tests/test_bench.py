@@ -8,11 +8,49 @@ from compiler.bench import BenchReport, run_bench
 from compiler.cli import main
 
 
-def test_bench_times_the_closed_form_against_numpy():
+def test_bench_times_the_closed_form_against_numpy_and_its_floor():
     report = run_bench("seed003", repeats=1, modes=("closed",), brian2=False)
-    assert set(report.seconds) == {"conventional", "closed"}
-    assert report.ratios()["closed_over_conventional"] > 0
-    assert "closed" in report.to_text() and report.peak_rss_gb > 0
+    assert set(report.seconds) == {"conventional", "closed", "floor", "floor_core"}
+    ratios = report.ratios()
+    assert ratios["closed_over_conventional"] > 0 and ratios["closed_over_floor"] > 0
+    text = report.to_text()
+    assert "closed_over_floor" in text and "load average" in text and report.peak_rss_gb > 0
+    assert report.floor_products and len(report.load_before) == 3
+
+
+def test_the_floor_is_the_silent_stages_dense_products():
+    """The range and Doppler S-FT matrices, one row per frame x repetition, shared (no copy)."""
+    from backends.reference import build_plan
+    from backends.reference.floor import floor_products
+    from compiler.chains import range_doppler_chain
+    from compiler.compile import compile_graph
+    from radar.config import preset
+    from radar.scene import SCENE_PRESETS, simulate_frame
+
+    config = preset("seed003")
+    frame = simulate_frame(config, SCENE_PRESETS["seed003"](), seed=1).adc
+    program = compile_graph(range_doppler_chain(config), None, calibration_inputs={"adc": frame})
+    plans = [build_plan(net) for net in program.networks]
+    products = floor_products(plans)
+    rx, chirps, samples = frame.shape
+    assert [p.shape[0] for p in products] == [rx * chirps, rx * samples // 2]
+    dl = plans[0].deliveries[products[0].id]
+    assert products[0].weights is dl.weights[0]
+
+
+def test_chain_inputs_refuses_a_chain_larger_than_the_frame():
+    import numpy as np
+    import pytest
+
+    from compiler.bench import chain_inputs
+    from ir import Graph
+    from ir.errors import RadarConfigError
+
+    g = Graph.from_dict({"name": "g", "nodes": [
+        {"id": "adc", "op": "adc_input", "shape": {"rx": 9, "sample": 4}, "complex": True},
+        {"id": "out", "op": "output", "input": "adc"}]})
+    with pytest.raises(RadarConfigError, match="does not fit inside"):
+        chain_inputs(g, np.zeros((8, 16), complex))
 
 
 def test_ratios_are_computed_from_one_run():
@@ -30,3 +68,5 @@ def test_bench_cli_json(capsys):
                  "--no-brian2", "--json", "-q"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["preset"] == "seed003" and "closed" in doc["frames_per_s"]
+    assert {"floor", "floor_core"} <= set(doc["seconds"]) and "closed_over_floor" in doc["ratios"]
+    assert len(doc["load_before"]) == 3 and doc["cpu_count"] >= 1

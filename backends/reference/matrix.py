@@ -367,8 +367,12 @@ class MatrixDelivery:
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
         # flat batch indices -> neurons by one vectorised remainder (np.take's mode="wrap"
-        # subtracts the size in a loop per index: quadratic in the number of frames)
-        return int(self.source_synapses[k][events % self.src_size].sum())
+        # subtracts the size in a loop per index: quadratic in the number of frames), skipped
+        # when every event is of the first frame (one pass for the max instead of a division)
+        per_source = self.source_synapses[k]
+        if events.size and int(events.max()) >= self.src_size:
+            events = events % self.src_size
+        return int(per_source[events].sum())
 
     def synapses_per_source(self, k: int) -> np.ndarray:
         """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""
