@@ -24,6 +24,8 @@ from typing import Any
 from backends import artifact
 from backends.artifact import ARTIFACT_VERSION
 from backends.program_artifact import PROGRAM_VERSION, is_program, load_program, save_program
+from compiler.program import CompiledProgram
+from compiler.snn import SpikingNetwork
 from ir.errors import ArtifactError
 
 __all__ = ["ARTIFACT_VERSION", "PROGRAM_VERSION", "is_program", "load", "load_program", "save",
@@ -36,8 +38,6 @@ def save(obj: Any, directory: str | Path, **kwargs: Any) -> Path:
     Keyword arguments go to :func:`backends.program_artifact.save_program` or
     :func:`backends.artifact.save`.
     """
-    from compiler.program import CompiledProgram
-    from compiler.snn import SpikingNetwork
 
     if isinstance(obj, CompiledProgram):
         return save_program(obj, directory, **kwargs)

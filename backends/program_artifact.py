@@ -42,7 +42,10 @@ from backends.artifact import load, network_files, read_manifest, write_files
 from backends.artifact_io import ARTIFACT_ENTRIES, plain_json, render_json
 from backends.atomic import replace_directory, write_file
 from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, seal
+from backends.reference.program import check_program
+from compiler.hardware import HardwareProfile
 from compiler.program import CompiledProgram, Segment
+from compiler.report import Report
 from ir import Graph
 from ir.errors import ArtifactError, RadarSNNError
 from ir.model import short_repr
@@ -229,9 +232,6 @@ def load_program(directory: str | Path) -> CompiledProgram:
         a network whose digest differs from the one recorded, or a graph or
         profile that does not parse (the message names the file).
     """
-    from backends.reference.program import check_program
-    from compiler.hardware import HardwareProfile
-    from compiler.report import Report
 
     folder = Path(directory)
     manifest = read_program_manifest(folder)

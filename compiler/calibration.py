@@ -36,6 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from compiler.snn.coding import split_values
 from ir.errors import BudgetError, CompileError
 from ir.limits import MAX_VALUE_BYTES, check_value_sizes
 
@@ -356,7 +357,6 @@ def second_moment(values: np.ndarray, axis: int, split: str) -> np.ndarray | Non
     >>> second_moment(np.array([[1.0, -2.0]]), axis=1, split="signed").tolist()
     [[1.0, 0.0, 0.0, 2.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 4.0]]
     """
-    from compiler.snn.coding import split_values
 
     parts = split_values(np.moveaxis(np.asarray(values), axis, -1), split)
     rows = parts.shape[-2] * parts.shape[-1]

@@ -282,39 +282,39 @@ class Graph:
 
     def to_dict(self) -> dict[str, Any]:
         """The chain-file mapping ``{"name": ..., "nodes": [...]}`` (see :mod:`ir.serialize`)."""
-        from ir.serialize import graph_to_dict
+        from ir.serialize import graph_to_dict  # serialize builds graphs: a cycle
 
         return graph_to_dict(self)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, registry: OpRegistry | None = None) -> Graph:
         """Build a graph from a chain-file mapping (see :mod:`ir.serialize`)."""
-        from ir.serialize import graph_from_dict
+        from ir.serialize import graph_from_dict  # serialize builds graphs: a cycle
 
         return graph_from_dict(data, registry=registry)
 
     def to_yaml(self) -> str:
         """The chain file as YAML text."""
-        from ir.serialize import graph_to_yaml
+        from ir.serialize import graph_to_yaml  # serialize builds graphs: a cycle
 
         return graph_to_yaml(self)
 
     @classmethod
     def from_yaml(cls, source: str | Path, *, registry: OpRegistry | None = None) -> Graph:
         """Read a chain from YAML text, or from a file if ``source`` is a ``Path``."""
-        from ir.serialize import graph_from_yaml
+        from ir.serialize import graph_from_yaml  # serialize builds graphs: a cycle
 
         return graph_from_yaml(source, registry=registry)
 
     def to_json(self) -> str:
         """The chain file as JSON text."""
-        from ir.serialize import graph_to_json
+        from ir.serialize import graph_to_json  # serialize builds graphs: a cycle
 
         return graph_to_json(self)
 
     @classmethod
     def from_json(cls, source: str | Path, *, registry: OpRegistry | None = None) -> Graph:
         """Read a chain from JSON text, or from a file if ``source`` is a ``Path``."""
-        from ir.serialize import graph_from_json
+        from ir.serialize import graph_from_json  # serialize builds graphs: a cycle
 
         return graph_from_json(source, registry=registry)

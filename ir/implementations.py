@@ -142,7 +142,7 @@ def _classifier(node_id: str, op: Classifier, args: list, types: list) -> np.nda
             "(docs/classifier.md) or evaluate the graph up to its input instead",
             node=node_id,
         )
-    from compiler.classifier import classify, load_weights
+    from compiler.classifier import classify, load_weights  # tests/test_layers.py EXCEPTIONS
 
     t = types[0]
     batch = op.batch_axes(t)

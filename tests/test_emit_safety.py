@@ -204,3 +204,34 @@ def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
         assert done.returncode == 1, done.stderr
         assert done.stderr.startswith("error: cannot read") and why in done.stderr, done.stderr
         assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+def test_the_package_command_line_takes_inputs_as_radarsnn_run_does(tmp_path):
+    """``python -m PKG -i x=X.npy`` as ``radarsnn run -i``; positional still works; a port twice is
+    a usage error (exit status 2)."""
+    net = SpikingNetwork(
+        name="tiny", n_steps=6,
+        populations=[Population(id="in", shape={"i": 2}, source=True),
+                     Population(id="out", shape={"o": 1},
+                                params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
+        projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
+                                      produce=("o",), weights=np.ones((2, 1)))],
+        encoders=[Encoder(port="x", population="in",
+                          code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
+        decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    pkg = emit_numpy(net, tmp_path, name="snn_inputs")
+    np.save(tmp_path / "x.npy", np.array([1.0, 0.5]))
+    x = str(tmp_path / "x.npy")
+
+    def run(*argv):
+        return subprocess.run([sys.executable, "-m", pkg.name, *argv], cwd=pkg.parent,
+                              capture_output=True, text=True, timeout=120, check=False)
+
+    for argv in (["-i", f"x={x}"], [f"x={x}"], ["--input", x]):
+        out = tmp_path / f"out{len(argv)}.npz"
+        done = run(*argv, "-o", str(out))
+        assert done.returncode == 0, done.stderr
+        assert np.load(out)["t"].tolist() == [2.0]
+    twice = run(f"x={x}", "-i", f"x={x}", "-o", str(tmp_path / "o.npz"))
+    assert twice.returncode == 2 and "given twice" in twice.stderr
+    assert run("-o", str(tmp_path / "o.npz")).returncode == 2  # no input at all

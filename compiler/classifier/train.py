@@ -2,7 +2,7 @@ r"""Training the classifier and its baselines with PyTorch (optional extra ``tra
 
 Models (``(n, T, H, W)`` ROI sequences in, class scores out):
 
-* :func:`snn_model` — the seed paper's SNN built from a :class:`~ir.ops.classify.Classifier`
+* :func:`snn_model` — paper 000's SNN built from a :class:`~ir.ops.classify.Classifier`
   op: the same update as :mod:`compiler.classifier.forward` (so the trained weights mean
   the same in numpy and in the compiled network), spikes through a surrogate gradient
   :math:`\partial s/\partial v = 1/(1 + \beta|v - v_{th}|)^2` (fast sigmoid), trained by
@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from compiler.classifier.plan import build_layer_plan
 from ir.ops.classify import Classifier, Conv2d, Integrator, Pool, Recurrent
 
 __all__ = ["ann_model", "cnn_model", "fan_out", "mac_counts", "snn_model", "snn_weights",
@@ -207,7 +208,6 @@ def fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[np.ndarray]:
     >>> [f.tolist() for f in fan_out(op, (3, 1))]
     [[[[2.0], [2.0]], [[2.0], [2.0]], [[2.0], [2.0]]], [0.0, 0.0], [[[3.0], [6.0], [3.0]]]]
     """
-    from compiler.classifier.plan import build_layer_plan
 
     shapes = op.feature_shapes("classifier", map_shape)
     ones = {k: np.ones(v) for k, v in op.weight_shapes("classifier", map_shape).items()}

@@ -26,6 +26,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_serial
 
 from ir.errors import CompileError
 from ir.model import short_repr
+from ir.parsing import load_yaml
+from ir.serialize import describe_yaml_error
 
 __all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "HardwareProfile",
            "load_profile"]
@@ -244,13 +246,10 @@ give a path to a YAML profile file
 
 
 def _from_text(text: str, label: str) -> HardwareProfile:
-    from ir.parsing import load_yaml
 
     try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
         data: Any = load_yaml(text, error=CompileError)
     except yaml.YAMLError as err:
-        from ir.serialize import describe_yaml_error
-
         raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
     except CompileError as err:
         raise CompileError(f"{label}: {err}") from err
@@ -258,7 +257,7 @@ def _from_text(text: str, label: str) -> HardwareProfile:
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
     if data.get("chip_profile") is not None:  # a board: its chip's budgets, never loosened
-        from compiler.hardware.boards import board_fields
+        from compiler.hardware.boards import board_fields  # boards imports this module
 
         data = board_fields(data, label)
     try:  # model_validate: a non-string key is a field error, not a TypeError of **data

@@ -132,7 +132,7 @@ class Report:
         """
         import matplotlib.pyplot as plt
 
-        from compiler.report.core_map import core_map_figure
+        from compiler.report.core_map import core_map_figure  # matplotlib: only when drawing
 
         fig = core_map_figure(self.data)
         path = Path(path)
