@@ -203,7 +203,7 @@ def fft_study(ns=(256, 512, 1024), steps=(100, 256)) -> None:
     est = sfft_resources(512, 100)
     print(f"\nS-FFT resources, N=512, T=100 (L = log4 N = {est.n_layers}): estimate "
           f"{est.neurons} neurons, {est.synapses} synapses, {est.steps} steps "
-          "(seed 000 Table 3: 4 608, 37 888, 550)")
+          "(paper 000 Table 3: 4 608, 37 888, 550)")
     chirps, _ = load_ti_chirps()
     for n in ns:
         g = Graph.from_dict({"name": f"ti-{n}", "nodes": [

@@ -297,7 +297,7 @@ def carrada() -> RadarConfig:
 
 
 def seed003() -> RadarConfig:
-    """Seed paper 003's sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
+    """Paper 003's sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
 
     The paper gives a 275 MHz sweep over a 54 us chirp; the ADC samples the whole ramp,
     so ``fs = 1024 / 54 us = 18.96 MHz`` and ``S = 275 MHz / 54 us``. Then

@@ -16,18 +16,28 @@ Conventions: ``velocity_mps > 0`` means receding (range grows); ``azimuth_deg > 
 the phase grows along increasing element position. Doppler bins are in the fftshifted
 layout (zero velocity at ``n_chirps // 2``), angle bins too (broadside at
 ``n_angle_bins // 2``).
+
+The records (:class:`Target`, :class:`Scene`, :class:`Frame`, …) are defined in
+:mod:`radar.scene_model` and the preset scenes in :mod:`radar.scene_presets`; this module
+re-exports them, so ``radar.scene`` names every one.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-
 import numpy as np
-from pydantic import Field, model_validator
 
 from ir.errors import RadarConfigError
-from radar.config import SPEED_OF_LIGHT_MPS, RadarConfig, RadarModel
+from radar.config import SPEED_OF_LIGHT_MPS, RadarConfig
+from radar.scene_model import (
+    Clutter,
+    Frame,
+    Leakage,
+    Scene,
+    Target,
+    TargetTruth,
+    target_amplitude_dbfs,
+)
+from radar.scene_presets import SCENE_PRESETS, carrada_scene, seed003_scene
 
 __all__ = [
     "SCENE_PRESETS",
@@ -42,139 +52,6 @@ __all__ = [
     "simulate_frame",
     "target_amplitude_dbfs",
 ]
-
-
-class Target(RadarModel):
-    """A moving point target; ``velocity_mps`` is radial, positive = receding."""
-
-    range_m: float = Field(gt=0)
-    velocity_mps: float = 0.0
-    azimuth_deg: float = Field(default=0.0, ge=-90, le=90)
-    rcs_dbsm: float = 0.0
-    name: str = ""
-
-
-class Leakage(RadarModel):
-    """A static near-range return (Tx->Rx leakage, radome, bumper, DC at ``range_m = 0``).
-
-    The radar equation does not hold this close, so the amplitude is given directly, as a
-    peak per-rail amplitude in dBFS; it is identical on every virtual channel.
-    """
-
-    range_m: float = Field(default=0.0, ge=0)
-    amplitude_dbfs: float
-    phase_deg: float = 0.0
-    name: str = "leakage"
-
-
-class Clutter(RadarModel):
-    """Static clutter: ``n_scatterers`` still points with random range, azimuth and phase.
-
-    Ranges are uniform in ``[min_range_m, max_range_m]``, azimuths uniform in
-    ``+-max_azimuth_deg``, amplitudes complex Gaussian with rms ``amplitude_dbfs``.
-    """
-
-    n_scatterers: int = Field(default=32, ge=1, le=1024)
-    amplitude_dbfs: float
-    min_range_m: float = Field(default=1.0, gt=0)
-    max_range_m: float = Field(gt=0)
-    max_azimuth_deg: float = Field(default=60.0, ge=0, le=90)
-
-    @model_validator(mode="after")
-    def _check_span(self) -> Clutter:
-        if self.min_range_m >= self.max_range_m:
-            raise RadarConfigError(
-                f"Clutter: min_range_m = {self.min_range_m:g} m must be below "
-                f"max_range_m = {self.max_range_m:g} m"
-            )
-        return self
-
-
-class Scene(RadarModel):
-    """What the radar sees, plus the receiver's noise and ADC behaviour.
-
-    ``gain_dbfs`` is the amplitude of a 0 dBsm target at 1 m (see
-    :func:`target_amplitude_dbfs`); ``noise_dbfs`` the rms noise per rail (None: no noise);
-    ``quantize`` turns ADC rounding and clipping on (the default) or off.
-    """
-
-    targets: tuple[Target, ...] = ()
-    leakage: tuple[Leakage, ...] = ()
-    clutter: Clutter | None = None
-    noise_dbfs: float | None = -70.0
-    gain_dbfs: float = -20.0
-    quantize: bool = True
-    name: str = "custom"
-
-
-class TargetTruth(RadarModel):
-    """Ground truth of one target for one frame.
-
-    ``range_bin`` is the nearest bin of the conventional range FFT (peak frequency at
-    mid-frame, Doppler shift included); ``doppler_bin`` the observed bin in the fftshifted
-    layout, aliased when ``aliased`` (velocity outside ``[-v_max, v_max)``); ``angle_bin``
-    the fftshifted bin of an ``n_angle_bins`` FFT over the virtual channels after TDM
-    Doppler compensation (None unless the virtual array is a uniform line).
-    """
-
-    name: str
-    range_m: float
-    velocity_mps: float
-    azimuth_deg: float
-    rcs_dbsm: float
-    amplitude_dbfs: float
-    range_bin: int
-    range_bin_exact: float
-    doppler_bin: int
-    doppler_bin_exact: float
-    aliased: bool
-    angle_bin: int | None
-
-
-@dataclass(frozen=True, eq=False)
-class Frame:
-    """One simulated frame: the read-only ADC cube and how it was made.
-
-    ``adc`` has shape ``[n_virtual, n_chirps, n_samples]`` (complex128 for IQ configs,
-    float64 for real ones) in ADC codes; ``n_clipped`` counts rail values the ADC clipped.
-    """
-
-    adc: np.ndarray
-    truth: tuple[TargetTruth, ...]
-    config: RadarConfig
-    scene: Scene
-    seed: int
-    n_angle_bins: int
-    n_clipped: int
-
-
-def target_amplitude_dbfs(rcs_dbsm: float, range_m: float, gain_dbfs: float) -> float:
-    """Peak per-rail amplitude of a target by the radar equation, dBFS.
-
-    ``|a| / FS = 10^(gain_dbfs/20) sqrt(sigma) / R^2`` with ``sigma = 10^(rcs_dbsm/10)`` m^2,
-    i.e. ``gain_dbfs + rcs_dbsm - 40 log10(range_m)`` dBFS.
-
-    Parameters
-    ----------
-    rcs_dbsm : float
-        Radar cross-section, dBsm.
-    range_m : float
-        Range, m (> 0).
-    gain_dbfs : float
-        Amplitude of a 0 dBsm target at 1 m, dBFS.
-
-    Returns
-    -------
-    float
-
-    Examples
-    --------
-    >>> target_amplitude_dbfs(0.0, 10.0, 0.0)
-    -40.0
-    >>> target_amplitude_dbfs(40.0, 100.0, -20.0)
-    -60.0
-    """
-    return gain_dbfs + rcs_dbsm - 40.0 * float(np.log10(range_m))
 
 
 def _returns(config: RadarConfig, scene: Scene, rng: np.random.Generator) -> tuple:
@@ -347,72 +224,3 @@ def simulate_frame(config: RadarConfig, scene: Scene, *, seed: int,
     adc.flags.writeable = False
     return Frame(adc=adc, truth=_truth(config, scene, n_angle_bins), config=config,
                  scene=scene, seed=int(seed), n_angle_bins=n_angle_bins, n_clipped=n_clipped)
-
-
-def seed003_scene() -> Scene:
-    """Seed paper 003's scene: pedestrians at 5 and 9 m, a car at 100 m, plus packaging.
-
-    Targets at 5, 9, 100 m moving at 0, 2, 14 m/s with RCS 0, 5, 40 dBsm (paper). The
-    20 mm sensor packaging (-40 dBsm) and the 1 cm bumper (-23 dBsm) become near-range
-    leakage at 0.02 m and 0.05 m (positions assumed), with the radar-equation amplitude
-    at that range (-12.0 and -11.0 dBFS at ``gain_dbfs = -40``). Noise: 1 LSB rms of the
-    12-bit ADC (-66.2 dBFS).
-
-    Returns
-    -------
-    Scene
-
-    Examples
-    --------
-    >>> [t.range_m for t in seed003_scene().targets]
-    [5.0, 9.0, 100.0]
-    """
-    gain = -40.0
-    return Scene(
-        name="seed003",
-        targets=(Target(range_m=5.0, velocity_mps=0.0, rcs_dbsm=0.0, name="pedestrian_1"),
-                 Target(range_m=9.0, velocity_mps=2.0, rcs_dbsm=5.0, name="pedestrian_2"),
-                 Target(range_m=100.0, velocity_mps=14.0, rcs_dbsm=40.0, name="car")),
-        leakage=(Leakage(range_m=0.02, name="packaging",
-                         amplitude_dbfs=target_amplitude_dbfs(-40.0, 0.02, gain)),
-                 Leakage(range_m=0.05, name="bumper",
-                         amplitude_dbfs=target_amplitude_dbfs(-23.0, 0.05, gain))),
-        noise_dbfs=-20 * np.log10(2048.0), gain_dbfs=gain)
-
-
-def carrada_scene() -> Scene:
-    """A street scene for the ``carrada`` preset: car, pedestrian, cyclist, fast car.
-
-    The fast car approaches at 20 m/s, beyond ``v_max = 13.52 m/s``, so its Doppler bin
-    aliases. Also Tx->Rx leakage at 0.05 m and 24 static clutter points.
-
-    Returns
-    -------
-    Scene
-
-    Examples
-    --------
-    >>> [t.name for t in carrada_scene().targets]
-    ['car', 'pedestrian', 'cyclist', 'fast_car']
-    """
-    return Scene(
-        name="carrada",
-        targets=(Target(range_m=25.0, velocity_mps=8.0, azimuth_deg=20.0, rcs_dbsm=10.0,
-                        name="car"),
-                 Target(range_m=8.0, velocity_mps=-1.5, azimuth_deg=-30.0, rcs_dbsm=-5.0,
-                        name="pedestrian"),
-                 Target(range_m=15.0, velocity_mps=4.0, azimuth_deg=10.0, rcs_dbsm=0.0,
-                        name="cyclist"),
-                 Target(range_m=40.0, velocity_mps=-20.0, azimuth_deg=-10.0, rcs_dbsm=15.0,
-                        name="fast_car")),
-        leakage=(Leakage(range_m=0.05, amplitude_dbfs=-30.0, name="tx_rx_leakage"),),
-        clutter=Clutter(n_scatterers=24, amplitude_dbfs=-75.0, min_range_m=3.0,
-                        max_range_m=48.0),
-        noise_dbfs=-80.0, gain_dbfs=-20.0)
-
-
-SCENE_PRESETS: dict[str, Callable[[], Scene]] = {
-    "seed003": seed003_scene,
-    "carrada": carrada_scene,
-}
-"""Radar preset name -> factory of the scene made for it (see :data:`radar.config.PRESETS`)."""

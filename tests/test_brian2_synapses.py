@@ -14,7 +14,7 @@ from compiler.snn import MatrixProjection, NeuronParams, Phase, Population, Sten
 
 def _reference_matrix(proj, src, tgt, k):
     """Current of one spike of every source neuron, delay class k: (n_post, n_pre)."""
-    d = DELIVERY_BUILDERS[proj.kind](proj, src, tgt, False)
+    d = DELIVERY_BUILDERS[type(proj)](proj, src, tgt, False)
     cols = [d.current(k, np.array([n]), 1).ravel() for n in range(src.size)]
     return d.delays[k], np.stack(cols, axis=1)
 
@@ -22,7 +22,7 @@ def _reference_matrix(proj, src, tgt, k):
 def _check(proj, src, tgt):
     syn = expand_projection(proj, src, tgt)
     assert np.all(syn.weight != 0)
-    n_classes = len(DELIVERY_BUILDERS[proj.kind](proj, src, tgt, False).delays)
+    n_classes = len(DELIVERY_BUILDERS[type(proj)](proj, src, tgt, False).delays)
     for k in range(n_classes):
         delay, want = _reference_matrix(proj, src, tgt, k)
         np.testing.assert_array_equal(dense_weights(syn, src.size, tgt.size, delay), want)

@@ -106,3 +106,38 @@ def test_the_errors_and_the_domain_import_no_ir():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=ROOT).stdout.strip()
     assert out == "['ir.errors']", out
+
+
+def test_function_level_imports_say_why():
+    """Outside the applications, a first-party import inside a function carries its reason.
+
+    The applications (CLI, demo, bench, sweep, emit command) import a command's machinery
+    only when the command runs, so ``radarsnn --help`` starts fast; everywhere else a
+    function-level import is there for a cycle that cannot be avoided by construction
+    (``ir.graph``'s chain-file methods and ``ir.serialize``), an optional or heavy
+    dependency (matplotlib), or a listed layer exception — and says so in a comment.
+    """
+    silent = []
+    for pkg in PACKAGES:
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            module = _module_name(path)
+            if layer(module) == 5:
+                continue
+            lines = path.read_text(encoding="utf-8").splitlines()
+            tree = ast.parse("\n".join(lines))
+            for fn in ast.walk(tree):
+                if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+                    continue
+                for node in ast.walk(fn):
+                    if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                        names = [node.module]
+                    elif isinstance(node, ast.Import):
+                        names = [a.name for a in node.names]
+                    else:
+                        continue
+                    if not any(n.split(".")[0] in PACKAGES for n in names):
+                        continue
+                    here, above = lines[node.lineno - 1], lines[node.lineno - 2]
+                    if "#" not in here and not above.strip().startswith("#"):
+                        silent.append(f"{module}:{node.lineno}: {here.strip()}")
+    assert not silent, "function-level imports without a reason:\n" + "\n".join(silent)

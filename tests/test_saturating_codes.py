@@ -1,6 +1,6 @@
 """A CFAR code whose top is a calibration quantile below 1 saturates by design.
 
-CA-CFAR's default code tops out at the 99.9 % calibration quantile, and the seed's Fig.-7
+CA-CFAR's default code tops out at the 99.9 % calibration quantile, and paper 000's Fig.-7
 setting puts OS-CFAR's at 99 %: the largest cells of the very maps the chain was calibrated
 on lie above the code and are clipped on purpose.  Those encoders are marked ``saturate``, so
 the default ``reject`` policy does not refuse the calibration data itself; their clipped

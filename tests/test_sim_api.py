@@ -173,7 +173,7 @@ def test_summary_mentions_mode_and_counts() -> None:
 
 def test_delivery_registry_is_explicit() -> None:
     from backends.reference import DELIVERY_BUILDERS
-    only_stencils = {k: v for k, v in DELIVERY_BUILDERS.items() if k != "matrix"}
+    only_stencils = {k: v for k, v in DELIVERY_BUILDERS.items() if k is not MatrixProjection}
     with pytest.raises(SimulationError, match=r"projection 'w': no delivery for kind 'matrix'"):
         build_plan(net_of(), builders=only_stencils)
 

@@ -86,7 +86,7 @@ def build_model(
     network: SpikingNetwork,
     trains: Mapping[str, Any],
     n_frames: int,
-    expanders: Mapping[str, Callable[..., SynapseList]] = EXPANDERS,
+    expanders: Mapping[type, Callable[..., SynapseList]] = EXPANDERS,
 ) -> Brian2Model:
     """Create the Brian2 objects of ``network`` for ``n_frames`` frames of input spikes.
 
@@ -147,9 +147,10 @@ def build_model(
         _at(monitors[pid], k, 4)
         groups[pid] = group
     for proj in network.projections:
-        if proj.kind not in expanders:
+        if type(proj) not in expanders:
             raise SimulationError(f"projection {proj.id!r}: the Brian2 backend has no synapse "
-                                  f"expander for kind {proj.kind!r}; known: {sorted(expanders)}",
+                                  f"expander for kind {proj.kind!r}; known: "
+                                  f"{sorted(getattr(t, 'kind', t.__name__) for t in expanders)}",
                                   node=proj.id)
         src, tgt = pops[proj.source], pops[proj.target]
         syn = expand_projection(proj, src, tgt, expanders).replicate(n_frames, src.size,

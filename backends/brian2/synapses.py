@@ -4,8 +4,8 @@ A chip, Brian2 and NIR have no notion of weights *shared* over repetition axes
 or of a kernel *correlated* over a map: they want every synapse spelled out.
 :func:`expand_projection` turns one projection into a :class:`SynapseList`
 ``(pre, post, weight, delay)`` of flat neuron indices (row-major over each
-population's own axis order), by the projection's ``kind`` through the
-explicit registry :data:`EXPANDERS`:
+population's own axis order), by the projection's *type* through the explicit
+registry :data:`EXPANDERS` (the backend's own table: the compile path does not know it):
 
 ``matrix``
     ``W`` of shape ``(n_in, n_out)`` instantiated for every repetition ``r``:
@@ -138,16 +138,16 @@ def expand_stencil(proj: StencilProjection, src: Population, tgt: Population) ->
                        np.broadcast_to(d, valid.shape)[valid].astype(np.int64))
 
 
-#: Synapse expanders by projection ``kind``: ``(projection, source, target) -> SynapseList``.
-EXPANDERS: Mapping[str, Callable[..., SynapseList]] = {
-    "matrix": expand_matrix,
-    "stencil": expand_stencil,
+#: Synapse expanders by projection type: ``(projection, source, target) -> SynapseList``.
+EXPANDERS: Mapping[type, Callable[..., SynapseList]] = {
+    MatrixProjection: expand_matrix,
+    StencilProjection: expand_stencil,
 }
 
 
 def expand_projection(
     proj: Projection, src: Population, tgt: Population,
-    expanders: Mapping[str, Callable[..., SynapseList]] = EXPANDERS,
+    expanders: Mapping[type, Callable[..., SynapseList]] = EXPANDERS,
 ) -> SynapseList:
     """Every synapse instance of ``proj`` between ``src`` and ``tgt``.
 
@@ -158,7 +158,7 @@ def expand_projection(
     src, tgt : Population
         Its source and target populations.
     expanders : mapping
-        Expander per projection ``kind`` (default :data:`EXPANDERS`).
+        Expander per projection type (default :data:`EXPANDERS`).
 
     Returns
     -------
@@ -167,7 +167,7 @@ def expand_projection(
     Raises
     ------
     KeyError
-        Never for the built-in kinds; an unknown ``kind`` is the caller's to report.
+        Never for the built-in kinds; an unknown type is the caller's to report.
 
     Examples
     --------
@@ -180,7 +180,7 @@ def expand_projection(
     >>> sorted(zip(s.post.tolist(), s.pre.tolist(), s.weight.tolist()))
     [(0, 1, 2.0), (1, 0, 1.0), (1, 2, 2.0), (2, 1, 1.0)]
     """
-    return expanders[proj.kind](proj, src, tgt)
+    return expanders[type(proj)](proj, src, tgt)
 
 
 def dense_weights(syn: SynapseList, n_pre: int, n_post: int, delay: int | None = None

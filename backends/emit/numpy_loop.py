@@ -31,7 +31,7 @@ __all__ = ["emit_network", "import_from"]
 def _on_ranges(sp_: StepParams) -> list[tuple[int, int]]:
     """Merged ``[start, stop)`` ranges of steps where the input phase is on."""
     out: list[tuple[int, int]] = []
-    for s in sp_.segments:
+    for s in sp_.spans:
         if s.input_on:
             if out and out[-1][1] == s.start:
                 out[-1] = (out[-1][0], s.stop)

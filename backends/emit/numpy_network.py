@@ -15,7 +15,9 @@ operation (:mod:`compiler.snn.neurons` is the equation):
   :mod:`backends.reference.decoding` does (``(scale·… + offset) / gains``, before
   ``combine``).
 
-The step loop that calls them is :mod:`backends.emit.numpy_loop`.
+Per-kind writers (deliveries) are picked from a table keyed by the projection
+type, never by testing its kind.  The step loop that calls them is
+:mod:`backends.emit.numpy_loop`.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from backends.reference.neuron import StepParams
 from compiler.snn.coding import N_PARTS, Decoder, Encoder, LatencyCode
 from compiler.snn.network import Population
 from compiler.snn.neurons import DECAY_ONE
-from compiler.snn.projections import MatrixProjection
+from compiler.snn.projections import MatrixProjection, StencilProjection
 from compiler.snn.resonator import ResonatorParams
 from ir.errors import CompileError
 
@@ -87,7 +89,7 @@ def update_function(pkg: PackageBuilder, module: str, pop: Population, sp_: Step
                            "(motif 'resonator'); simulate it with backends.reference or "
                            "compile that node with motif 'time'", node=pop.origin.get("node"))
     fn = pkg.function(module, "update_", pop.id)
-    segs = sp_.segments
+    segs = sp_.spans
     if len(segs) == 1:
         phases = indent(_phase(sp_, segs[0].bias, segs[0].input_on, segs[0].spiking_on))
     else:
@@ -115,23 +117,33 @@ def update_function(pkg: PackageBuilder, module: str, pop: Population, sp_: Step
 
 # --------------------------------------------------------------------- deliveries
 def deliver_function(pkg: PackageBuilder, module: str, proj, dl, pops: dict, integer: bool) -> str:
-    """Write the delivery of projection ``proj``; return its function name."""
+    """Write the delivery of projection ``proj``; return its function name.
+
+    The writer is picked by the projection's type from :data:`_DELIVERY_WRITERS`.
+    """
     fn = pkg.function(module, "deliver_", proj.id)
     src, tgt = pops[proj.source], pops[proj.target]
-    integer_ = lit(bool(integer))
-    if proj.kind == "stencil":
-        key = ""
-        for k in range(len(dl.delays)):
-            for part, arr in (("weights", dl.tap_weights[k]), ("offsets", dl.offsets[k]),
-                              ("deltas", dl.deltas[k]), ("interior", dl.interior[k]),
-                              ("base_of", dl.base_of)):
-                key = pkg.store(module, fn, k, part, arr)
-        pkg.add(module, render(
-            template("stencil.tmpl"), fn=ident(fn), delays=lit(dl.delays), proj=comment(proj.id),
-            key=lit(key), map_axes=lit(dl.map_axes), wrap=lit(dl.wrap),
-            src_axis_of=lit(dl.src_axis_of), src_dims=lit(dl.src_dims),
-            tgt_dims=lit(dl.tgt_dims), integer=integer_))
-        return fn
+    _DELIVERY_WRITERS[type(proj)](pkg, module, fn, proj, dl, src, tgt, lit(bool(integer)))
+    return fn
+
+
+def _deliver_stencil(pkg: PackageBuilder, module: str, fn: str, proj, dl, src: Population,
+                     tgt: Population, integer_: Code) -> None:
+    key = ""
+    for k in range(len(dl.delays)):
+        for part, arr in (("weights", dl.tap_weights[k]), ("offsets", dl.offsets[k]),
+                          ("deltas", dl.deltas[k]), ("interior", dl.interior[k]),
+                          ("base_of", dl.base_of)):
+            key = pkg.store(module, fn, k, part, arr)
+    pkg.add(module, render(
+        template("stencil.tmpl"), fn=ident(fn), delays=lit(dl.delays), proj=comment(proj.id),
+        key=lit(key), map_axes=lit(dl.map_axes), wrap=lit(dl.wrap),
+        src_axis_of=lit(dl.src_axis_of), src_dims=lit(dl.src_dims),
+        tgt_dims=lit(dl.tgt_dims), integer=integer_))
+
+
+def _deliver_matrix(pkg: PackageBuilder, module: str, fn: str, proj, dl, src: Population,
+                    tgt: Population, integer_: Code) -> None:
     rep_axes = tuple(a for a in tgt.axes if a not in proj.produce)
     index = ident("index_" + fn.removeprefix("deliver_"))
     if sp.issparse(dl.weights[0]):
@@ -161,7 +173,10 @@ def deliver_function(pkg: PackageBuilder, module: str, proj, dl, pops: dict, int
         col_positions=lit(tuple(src.axes.index(a) for a in proj.contract)),
         n_reps=lit(int(dl.n_reps)), block_shape=lit(tuple(int(x) for x in dl.block_shape)),
         to_target=lit(tuple(int(x) for x in dl.to_target)), body=body))
-    return fn
+
+
+#: Delivery writers by projection type (the emitter's own table, after the reference plan's).
+_DELIVERY_WRITERS = {MatrixProjection: _deliver_matrix, StencilProjection: _deliver_stencil}
 
 
 # --------------------------------------------------------------------- ports

@@ -17,6 +17,9 @@ every name traces to its IR node, also stored as ``radarsnn_node``):
   readout runs outside (``radarsnn_decoder``).
 
 NIR sums the inputs of a node with several incoming edges, as our currents add.
+Synapses come from the Brian2 expanders (a table keyed by projection type); how a
+kind is lowered is read from the exporter's own type-keyed table ``_LOWERING``,
+never from a test of the projection's kind.
 
 Examples
 --------
@@ -54,6 +57,7 @@ from backends.nir.neurons import bias_of, neuron_nodes, origin_node, scaled_bias
 from backends.nir.report import ExportReport
 from compiler.program import CompiledProgram
 from compiler.snn.network import SpikingNetwork
+from compiler.snn.projections import MatrixProjection, StencilProjection
 from compiler.snn.resonator import ResonatorParams
 from ir.errors import ArtifactError
 
@@ -67,6 +71,14 @@ MAX_WEIGHTS = 1 << 24
 CONVENTION = ("forward Euler with step radarsnn_dt_s; per step: current stage, then voltage "
               "stage, both reading this step's input; Delay in multiples of dt; spike when "
               "v > v_threshold, then v = v_reset (compiler.snn.neurons)")
+
+
+#: How each projection type becomes dense ``Linear`` nodes, by type (the exporter's own table):
+#: ``(projection, source) -> (wording, exact)``; a matrix is exact when applied once.
+_LOWERING = {
+    MatrixProjection: lambda p, src: ("shared matrix instantiated as", src.size == p.n_in),
+    StencilProjection: lambda p, src: ("stencil expanded to", False),
+}
 
 
 def nir_name(item_id: str, prefix: str = "") -> str:
@@ -160,8 +172,8 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
                 head = delay
             edges += [(head, lin), (lin, entry[proj.target])]
             report.nodes[lin] = proj.id
-        how = "stencil expanded to" if proj.kind == "stencil" else "shared matrix instantiated as"
-        kind = "exact" if proj.kind == "matrix" and src.size == proj.n_in else "lowered"
+        how, exact = _LOWERING[type(proj)](proj, src)
+        kind = "exact" if exact else "lowered"
         report.add(proj.id, "weights", kind,
                    f"{how} a dense {tgt.size} x {src.size} Linear per delay class "
                    f"({len(syn)} synapses)")

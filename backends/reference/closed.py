@@ -4,8 +4,8 @@ Eligible networks (:func:`closed_form_problems` is empty): every neuron
 population has ``reset="fire_once"`` and the population graph is acyclic.
 Then a neuron's ``u`` and ``v`` do not depend on its own spikes (fire-once
 leaves ``v`` alone), so each population is solved once, in topological order,
-from the spike steps of its sources, phase segment by phase segment, each by
-the cheapest exact rule (:mod:`backends.reference.segments`): *silent*
+from the spike steps of its sources, phase span by phase span, each by
+the cheapest exact rule (:mod:`backends.reference.spans`): *silent*
 (input on, spiking off: arrival features, no time loop), *gated* (the OS-CFAR
 neurons: one comparison per tap, :mod:`backends.reference.gate`), *charging*
 (input off: the analytic crossing), else *driven* (the step engine's own
@@ -26,12 +26,12 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.encoding import Train
-from backends.reference.gate import is_gated_segment, solve_gated
+from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps, order_by_step
 from backends.reference.plan import SimPlan, closed_form_problems
 from backends.reference.resonator import ResonatorStepParams, solve_resonator
 from backends.reference.result import Activity
-from backends.reference.segments import Arrivals, charge, drive, driven, silent
+from backends.reference.spans import Arrivals, charge, drive, driven, silent
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 
@@ -59,7 +59,7 @@ def run_closed(
     record : bool
         Build spike rasters from the spike steps.
     block_bytes : int
-        Cap on one drive histogram; longer driven segments are cut into blocks.
+        Cap on one drive histogram; longer driven spans are cut into blocks.
 
     Returns
     -------
@@ -162,21 +162,21 @@ def _solve(
 def _solve_neurons(plan: SimPlan, pid: str, params, arrivals: list, spikes: dict,
                    n_frames: int, block_bytes: int, u: np.ndarray, v: np.ndarray,
                    first: np.ndarray) -> np.ndarray:
-    """End membranes of an IF/LIF population, segment by segment; fills ``first``."""
+    """End membranes of an IF/LIF population, span by span; fills ``first``."""
     pop = plan.populations[pid]
     n = n_frames * pop.size
     simple = params.dv == 0.0 and params.du in (0.0, 1.0)
     block = max(1, block_bytes // (3 * 8 * n))
-    for i, seg in enumerate(params.segments):
+    for i, seg in enumerate(params.spans):
         if not seg.input_on and params.dv == 0.0:
             u, v = charge(v, first, seg, params)
         elif seg.input_on and not seg.spiking_on and simple:
-            # the end current u matters only if a later segment takes input (else it is reset)
-            need_u = any(s.input_on for s in params.segments[i + 1:])
+            # the end current u matters only if a later span takes input (else it is reset)
+            need_u = any(s.input_on for s in params.spans[i + 1:])
             u, v = silent(u, v, seg, params, arrivals, n_frames, pop.dims, need_u=need_u)
-        elif (is_gated_segment(seg, params) and (gates := plan.gates.get(pid)) is not None
+        elif (is_gated_span(seg, params) and (gates := plan.gates.get(pid)) is not None
               and (end := solve_gated(plan, pid, gates, seg, params, v, first, spikes, n_frames,
-                                      any(s.input_on for s in params.segments[i + 1:])))
+                                      any(s.input_on for s in params.spans[i + 1:])))
               is not None):
             u, v = end
         else:

@@ -19,7 +19,7 @@ over its target map at :data:`STENCIL_OPS_PER_S`, a matrix's synapse instances a
 :data:`BLAS_OPS_PER_S` (dense weights, weighted deliveries: one BLAS product) or
 at the gathering rate ``SYNAPSE_OPS_PER_S`` (sparse or delayed weights, or a
 target solved by the driven path), plus :data:`CLOSED_EVENT_S` per spike for the
-one-hot products of sparse matrices, and the driven segments (the step engine's
+one-hot products of sparse matrices, and the driven spans (the step engine's
 own recurrences, ``L`` steps of ``S_p`` neurons) at ``NEURON_UPDATES_PER_S``.
 Stencils and sparse matrices into a *gated* population (the OS-CFAR neurons,
 :mod:`backends.reference.gate`) count twice: its solver reads them once for the
@@ -42,7 +42,7 @@ Examples
 ...                                   produce=("o",), weights=np.ones((4, 2)))],
 ...     encoders=[Encoder(port="x", population="a",
 ...                       code=LatencyCode(t_max=10, x_min=0.0, x_max=1.0))])
->>> [kind for _, kind in segment_kinds(net, "b")]  # input and spiking on, du = 0
+>>> [kind for _, kind in span_kinds(net, "b")]  # input and spiking on, du = 0
 ['driven']
 >>> round(closed_time_per_frame(net) * 1e9)  # 60 x 6 neurons + 10 x 2 / 2e8 + 8 / 1e9
 468
@@ -53,12 +53,13 @@ from __future__ import annotations
 from math import prod
 
 from compiler.snn.network import SpikingNetwork
+from compiler.snn.projections import MatrixProjection, StencilProjection
 
 __all__ = ["BLAS_OPS_PER_S", "CLOSED_EVENT_S", "CLOSED_NEURON_S", "NEURON_UPDATES_PER_S",
-           "STENCIL_OPS_PER_S", "SYNAPSE_OPS_PER_S", "closed_time_per_frame", "segment_kinds",
+           "STENCIL_OPS_PER_S", "SYNAPSE_OPS_PER_S", "closed_time_per_frame", "span_kinds",
            "spikes_per_neuron"]
 
-#: Vectorised neuron updates per second (one core, numpy): the step engine, driven segments.
+#: Vectorised neuron updates per second (one core, numpy): the step engine, driven spans.
 NEURON_UPDATES_PER_S = 2e8
 #: Synaptic multiply-adds per second through gathers or sparse products (one core).
 SYNAPSE_OPS_PER_S = 1e9
@@ -89,12 +90,12 @@ def spikes_per_neuron(network: SpikingNetwork, pid: str) -> float:
 
 def _gate_shaped(network: SpikingNetwork, pid: str) -> bool:
     """One matrix and any stencils into ``pid`` (the gated solver's structure, weights unread)."""
-    kinds = [q.kind for q in network.projections if q.target == pid]
-    return kinds.count("matrix") == 1 and all(k in ("matrix", "stencil") for k in kinds)
+    roles = [_GATE_ROLE.get(type(q)) for q in network.projections if q.target == pid]
+    return roles.count("matrix") == 1 and None not in roles
 
 
-def segment_kinds(network: SpikingNetwork, pid: str) -> list[tuple[int, str]]:
-    """``(steps, kind)`` of each phase segment of ``pid`` as the closed form solves it.
+def span_kinds(network: SpikingNetwork, pid: str) -> list[tuple[int, str]]:
+    """``(steps, kind)`` of each phase span of ``pid`` as the closed form solves it.
 
     Kinds follow :func:`backends.reference.closed._solve`: ``charge`` (input off,
     ``dv = 0``), ``silent`` (input on, spiking off, ``dv = 0``, ``du`` 0 or 1),
@@ -138,7 +139,7 @@ def closed_time_per_frame(network: SpikingNetwork) -> float:
     driven_steps, kinds = 0, {}
     for pop in network.populations:
         if not pop.source:
-            kinds[pop.id] = segment_kinds(network, pop.id)
+            kinds[pop.id] = span_kinds(network, pop.id)
             driven_steps += sum(steps for steps, k in kinds[pop.id] if k == "driven") * pop.size
     t = CLOSED_NEURON_S * sum(p.size for p in network.populations)
     t += driven_steps / NEURON_UPDATES_PER_S
@@ -147,13 +148,24 @@ def closed_time_per_frame(network: SpikingNetwork) -> float:
         spikes = spikes_per_neuron(network, q.source)
         target_kinds = {k for _, k in kinds[q.target]}
         passes = 2 if "gated" in target_kinds else 1  # by-arrival weights, then totals
-        if q.kind == "stencil":
-            t += passes * tgt.size * q.n_taps * spikes / STENCIL_OPS_PER_S
-            continue
-        reps = src.size // max(1, prod(src.shape[a] for a in q.contract))
-        ops = reps * int(q.n_synapses) * spikes
-        if q.weights is None or q.delays is not None:  # sparse: CSR one-hot products
-            t += passes * (ops / SYNAPSE_OPS_PER_S + CLOSED_EVENT_S * src.size * spikes)
-        else:
-            t += ops / (SYNAPSE_OPS_PER_S if "driven" in target_kinds else BLAS_OPS_PER_S)
+        t += _DELIVERY_TIME[type(q)](q, src, tgt, spikes, passes, target_kinds)
     return t
+
+
+def _stencil_time(q, src, tgt, spikes: float, passes: int, target_kinds: set) -> float:
+    return passes * tgt.size * q.n_taps * spikes / STENCIL_OPS_PER_S
+
+
+def _matrix_time(q, src, tgt, spikes: float, passes: int, target_kinds: set) -> float:
+    reps = src.size // max(1, prod(src.shape[a] for a in q.contract))
+    ops = reps * int(q.n_synapses) * spikes
+    if q.weights is None or q.delays is not None:  # sparse: CSR one-hot products
+        return passes * (ops / SYNAPSE_OPS_PER_S + CLOSED_EVENT_S * src.size * spikes)
+    return ops / (SYNAPSE_OPS_PER_S if "driven" in target_kinds else BLAS_OPS_PER_S)
+
+
+#: Closed-form delivery time by projection type (the solver's own costs; explicit table).
+_DELIVERY_TIME = {MatrixProjection: _matrix_time, StencilProjection: _stencil_time}
+
+#: The gated solver's role of each projection type: one matrix and any stencils.
+_GATE_ROLE = {MatrixProjection: "matrix", StencilProjection: "stencil"}

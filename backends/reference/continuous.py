@@ -55,7 +55,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.snn import LatencyCode, MatrixProjection, Population, SpikingNetwork
+from compiler.snn import (
+    LatencyCode,
+    MatrixProjection,
+    Population,
+    SpikingNetwork,
+    StencilProjection,
+)
 from compiler.snn.coding import N_PARTS, normalize_values, split_values
 from ir.errors import SimulationError
 
@@ -167,32 +173,35 @@ def _source_times(network: SpikingNetwork, inputs: dict) -> tuple[dict, int, boo
     return times, n_frames, framed
 
 
-def _synapses(proj, src: Population, tgt: Population) -> tuple[np.ndarray, ...]:
-    """Every synapse instance as flat (source index, target index, weight, delay)."""
-    if isinstance(proj, MatrixProjection):
-        w = proj.weights
-        if w is not None:
-            r, c = np.nonzero(w)
-            vals = w[r, c]
-            dl = proj.delays[r, c] if proj.delays is not None else np.zeros(r.size, np.int64)
-        else:
-            r, c, vals = proj.rows, proj.cols, proj.values
-            dl = proj.delays if proj.delays is not None else np.zeros(r.size, np.int64)
-        reps = [a for a in src.axes if a not in proj.contract]
-        rep_dims = [src.shape[a] for a in reps]
-        rep_idx = np.indices(rep_dims).reshape(len(reps), int(np.prod(rep_dims)))
-        n_rep = int(np.prod(rep_dims))
-        ci = np.unravel_index(r, [src.shape[a] for a in proj.contract])
-        pi = np.unravel_index(c, [tgt.shape[a] for a in proj.produce])
-        s_coord = {**dict(zip(proj.contract, ci, strict=True))}
-        t_coord = {**dict(zip(proj.produce, pi, strict=True))}
-        s_full = [np.repeat(s_coord[a][None], n_rep, 0) if a in s_coord else
-                  np.repeat(rep_idx[reps.index(a)][:, None], r.size, 1) for a in src.axes]
-        t_full = [np.repeat(t_coord[a][None], n_rep, 0) if a in t_coord else
-                  np.repeat(rep_idx[reps.index(a)][:, None], r.size, 1) for a in tgt.axes]
-        s = np.ravel_multi_index(s_full, src.dims).ravel()
-        t = np.ravel_multi_index(t_full, tgt.dims).ravel()
-        return s, t, np.tile(vals, n_rep), np.tile(dl, n_rep)
+def _matrix_synapses(proj, src: Population, tgt: Population) -> tuple[np.ndarray, ...]:
+    """Every synapse instance of a matrix as flat (source index, target index, weight, delay)."""
+    w = proj.weights
+    if w is not None:
+        r, c = np.nonzero(w)
+        vals = w[r, c]
+        dl = proj.delays[r, c] if proj.delays is not None else np.zeros(r.size, np.int64)
+    else:
+        r, c, vals = proj.rows, proj.cols, proj.values
+        dl = proj.delays if proj.delays is not None else np.zeros(r.size, np.int64)
+    reps = [a for a in src.axes if a not in proj.contract]
+    rep_dims = [src.shape[a] for a in reps]
+    rep_idx = np.indices(rep_dims).reshape(len(reps), int(np.prod(rep_dims)))
+    n_rep = int(np.prod(rep_dims))
+    ci = np.unravel_index(r, [src.shape[a] for a in proj.contract])
+    pi = np.unravel_index(c, [tgt.shape[a] for a in proj.produce])
+    s_coord = {**dict(zip(proj.contract, ci, strict=True))}
+    t_coord = {**dict(zip(proj.produce, pi, strict=True))}
+    s_full = [np.repeat(s_coord[a][None], n_rep, 0) if a in s_coord else
+              np.repeat(rep_idx[reps.index(a)][:, None], r.size, 1) for a in src.axes]
+    t_full = [np.repeat(t_coord[a][None], n_rep, 0) if a in t_coord else
+              np.repeat(rep_idx[reps.index(a)][:, None], r.size, 1) for a in tgt.axes]
+    s = np.ravel_multi_index(s_full, src.dims).ravel()
+    t = np.ravel_multi_index(t_full, tgt.dims).ravel()
+    return s, t, np.tile(vals, n_rep), np.tile(dl, n_rep)
+
+
+def _stencil_synapses(proj, src: Population, tgt: Population) -> tuple[np.ndarray, ...]:
+    """Every synapse instance of a stencil as flat (source index, target index, weight, delay)."""
     taps = np.argwhere(proj.kernel != 0)
     coords = np.indices(tgt.dims).reshape(len(tgt.dims), -1)
     n_tgt = coords.shape[1]
@@ -217,6 +226,15 @@ def _synapses(proj, src: Population, tgt: Population) -> tuple[np.ndarray, ...]:
         d = 0 if proj.delays is None else int(proj.delays[tuple(tap)])
         d_list.append(np.full(ok.sum(), d, np.int64))
     return tuple(np.concatenate(x) for x in (s_list, t_list, w_list, d_list))
+
+
+#: Synapse expansions by projection type (the solver's own; explicit, no isinstance ladder).
+_SYNAPSES = {MatrixProjection: _matrix_synapses, StencilProjection: _stencil_synapses}
+
+
+def _synapses(proj, src: Population, tgt: Population) -> tuple[np.ndarray, ...]:
+    """Every synapse instance as flat (source index, target index, weight, delay)."""
+    return _SYNAPSES[type(proj)](proj, src, tgt)
 
 
 def _solve(network: SpikingNetwork, pop: Population, times: dict, n_frames: int,

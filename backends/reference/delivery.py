@@ -11,8 +11,10 @@ times the synapses it reaches); ``weight_nbytes`` is the weight memory.
 
 Kinds: :class:`~backends.reference.matrix.MatrixDelivery` (shared matrix along
 named axes) and :class:`~backends.reference.stencil.StencilDelivery` (kernel
-correlation), built from a projection's ``kind`` through the explicit
-registry :data:`DELIVERY_BUILDERS`.
+correlation), built from a projection's *type* through the explicit
+registry :data:`DELIVERY_BUILDERS` (``{MatrixProjection: …, StencilProjection: …}``): the
+deliveries are the simulator's, so the compile-path projection classes do not know
+them and no ``isinstance`` ladder picks one.
 
 The step engine adds currents straight into a population's state with
 :func:`add_current` (a kind's in-place adder from :data:`IN_PLACE_ADDERS`, else
@@ -31,6 +33,7 @@ import numpy as np
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.row_sums import SEQUENTIAL_MAX, run_starts
 from backends.reference.stencil import StencilDelivery
+from compiler.snn.projections import MatrixProjection, StencilProjection
 
 __all__ = ["MatrixDelivery", "StencilDelivery", "Delivery", "DELIVERY_BUILDERS",
            "IN_PLACE_ADDERS", "SYNAPSE_COUNTS", "TRAIN_CURRENTS", "TrainCurrents", "add_current",
@@ -38,10 +41,10 @@ __all__ = ["MatrixDelivery", "StencilDelivery", "Delivery", "DELIVERY_BUILDERS",
 
 Delivery = MatrixDelivery | StencilDelivery
 
-#: Delivery builders by projection ``kind``: ``(projection, source, target, integer) -> delivery``.
-DELIVERY_BUILDERS: dict[str, Callable[..., Delivery]] = {
-    "matrix": MatrixDelivery.build,
-    "stencil": StencilDelivery.build,
+#: Delivery builders by projection type: ``(projection, source, target, integer) -> delivery``.
+DELIVERY_BUILDERS: dict[type, Callable[..., Delivery]] = {
+    MatrixProjection: MatrixDelivery.build,
+    StencilProjection: StencilDelivery.build,
 }
 
 #: In-place adders by delivery type, ``(delivery, k, events, n_batch, out) -> None``; a type

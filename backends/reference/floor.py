@@ -1,10 +1,10 @@
 r"""The closed form's floor: the dense matrix products it must apply, as plain numpy products.
 
-In a *silent* segment (input on, spiking off) the closed form turns every
+In a *silent* span (input on, spiking off) the closed form turns every
 matrix projection into one product of the whole batch, ``X W`` (``X``: one row
 per frame and repetition — e.g. ``rx × chirp`` for a range S-FT — holding the
 integer arrival features of the inputs; ``W``: the projection's shared
-``n_in × n_out`` matrix, :mod:`backends.reference.segments`).  No simulator can
+``n_in × n_out`` matrix, :mod:`backends.reference.spans`).  No simulator can
 do less, so the bench times exactly those products, with the same ``W`` (the
 plan's own array, never copied or tiled) and an ``X`` of the same shape and
 integer values, as a plain ``X @ W`` in the plan's arithmetic: float64 (BLAS;
@@ -72,17 +72,17 @@ class FloorProduct:
 
 
 def floor_products(plans: list[SimPlan], n_frames: int = 1) -> list[FloorProduct]:
-    """The dense whole-batch products of the closed form's silent segments, per plan.
+    """The dense whole-batch products of the closed form's silent spans, per plan.
 
     A matrix projection with dense weights counts once per delay class when its
-    target has a silent segment (input on, spiking off).
+    target has a silent span (input on, spiking off).
     """
     out = []
     for plan in plans:
         for qid, dl in plan.deliveries.items():
             params = plan.neurons.get(dl.target)
             silent = params is not None and any(s.input_on and not s.spiking_on
-                                                for s in getattr(params, "segments", ()))
+                                                for s in getattr(params, "spans", ()))
             if not isinstance(dl, MatrixDelivery) or not silent:
                 continue
             for k, w in enumerate(dl.weights):

@@ -1,6 +1,6 @@
 r"""Closed form of *gated* IF neurons: one excitatory synapse, inhibitory stencils.
 
-A segment ``[s_0, s_1)`` of a fire-once population is *gated* when its neurons
+A span ``[s_0, s_1)`` of a fire-once population is *gated* when its neurons
 integrate without leak or bias (``d_u = 1``, ``d_v = 0``, ``b = 0``, input and
 spiking on) and their inputs are
 
@@ -10,7 +10,7 @@ spiking on) and their inputs are
 * any number of :class:`~backends.reference.stencil.StencilDelivery` with
   non-positive kernels (inhibition),
 
-and every source spikes at most once in the segment.  Then
+and every source spikes at most once in the span.  Then
 
 .. math:: v[t] = v_0 + \sum_{j:\ a_j \le t} w_j
 
@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from backends.reference.matrix import MatrixDelivery
-from backends.reference.neuron import Segment, StepParams
+from backends.reference.neuron import PhaseSpan, StepParams
 from backends.reference.stencil import StencilDelivery
 
 if TYPE_CHECKING:
@@ -103,7 +103,7 @@ def gate_inputs(deliveries: Mapping[str, object], incoming: Sequence[str]) -> Ga
     return None if gate is None else GateInputs(gate, tuple(stencils))
 
 
-def is_gated_segment(seg: Segment, params: StepParams) -> bool:
+def is_gated_span(seg: PhaseSpan, params: StepParams) -> bool:
     """Whether ``seg`` integrates without leak or bias with input and spiking on."""
     return (seg.input_on and seg.spiking_on and params.du == 1.0 and params.dv == 0.0
             and seg.bias == 0 and params.scale is None)
@@ -114,29 +114,29 @@ def _single(flat: np.ndarray, n: int) -> bool:
 
 
 def solve_gated(
-    plan: SimPlan, pid: str, gates: GateInputs, seg: Segment, params: StepParams,
+    plan: SimPlan, pid: str, gates: GateInputs, seg: PhaseSpan, params: StepParams,
     v: np.ndarray, first: np.ndarray, spikes: dict, n_frames: int, need_u: bool
 ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Solve one gated segment; None when a run-time condition fails (use another path).
+    """Solve one gated span; None when a run-time condition fails (use another path).
 
     Parameters
     ----------
     plan, pid : the plan and the population.
     gates : GateInputs
         From :func:`gate_inputs` (``plan.gates[pid]``).
-    seg, params : the segment and the population's constants.
+    seg, params : the span and the population's constants.
     v, first : ndarray
-        Membrane at the segment start and first spike steps (``-1`` none), flat
+        Membrane at the span start and first spike steps (``-1`` none), flat
         over ``(frames, neurons)``; ``first`` is updated in place.
     spikes : dict
         ``(flat, step)`` of every source population solved so far.
     n_frames : int
     need_u : bool
-        Whether a later segment reads the end current.
+        Whether a later span reads the end current.
 
     Returns
     -------
-    (u, v) at the segment end, or None (nothing changed).
+    (u, v) at the span end, or None (nothing changed).
     """
     s0, s1 = seg.start, seg.stop
     idle = first < 0
@@ -145,7 +145,7 @@ def solve_gated(
     pop = plan.populations[pid]
     shape = (n_frames, *pop.dims)
     dtype = v.dtype
-    # the gate: per target, its weight (0 = no spike in the segment) and its arrival step
+    # the gate: per target, its weight (0 = no spike in the span) and its arrival step
     dl = plan.deliveries[gates.gate]
     flat, step = spikes[dl.source]
     arrive = step + dl.delays[0]

@@ -28,7 +28,7 @@ instance once per source spike: one for latency codes and fire-once neurons, up 
 ``max_rate·T`` for rate codes and ``T/2`` for neurons that fire repeatedly), plus
 :data:`STEP_OVERHEAD_S` per population and step.  Closed form: ``F`` times
 :func:`~backends.reference.closed_cost.closed_time_per_frame` (per neuron, per
-synapse by delivery path, and only the driven segments per step; the engine is
+synapse by delivery path, and only the driven spans per step; the engine is
 linear in ``F``).  Both are estimates of the leading terms within a small factor
 (measured: ``benchmarks/closed_scaling.py``), not bounds.
 
@@ -57,7 +57,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from math import prod
 
 from backends.reference.closed_cost import (
     NEURON_UPDATES_PER_S,
@@ -153,13 +152,9 @@ def estimate_simulation(network: SpikingNetwork, n_frames: int, *, mode: str = "
     delivery, synapse_ops = 0, 0.0
     for q in network.projections:
         src, tgt = by_id[q.source], by_id[q.target]
-        if hasattr(q, "contract"):
-            reps = src.size // max(1, prod(src.shape[a] for a in q.contract))
-            delivery = max(delivery, 16 * reps * (q.n_in + q.n_out))
-            instances = reps * _nnz(q)
-        else:
-            delivery = max(delivery, 16 * (src.size + tgt.size))
-            instances = tgt.size * q.n_taps
+        # a matrix's R (n_in + n_out) is |S| + |T|, as a stencil's is: one rule for every kind
+        delivery = max(delivery, 16 * (src.size + tgt.size))
+        instances = q.n_synapse_instances(src, tgt)
         synapse_ops += instances * spikes_per_neuron(network, q.source)
         if mode == "step" and src.source:  # the train's currents computed ahead in blocks
             per_frame += _AHEAD_BYTES * src.size

@@ -45,7 +45,7 @@ import numpy as np
 
 from compiler.snn.neurons import DECAY_ONE, NeuronParams
 
-__all__ = ["NeuronState", "StepParams", "Segment", "decay", "neuron_step"]
+__all__ = ["NeuronState", "PhaseSpan", "StepParams", "decay", "neuron_step"]
 
 
 class NeuronState(NamedTuple):
@@ -68,7 +68,7 @@ class NeuronState(NamedTuple):
         return cls(np.zeros(shape, dtype), np.zeros(shape, dtype), np.zeros(shape, bool))
 
 
-class Segment(NamedTuple):
+class PhaseSpan(NamedTuple):
     """A run of steps ``[start, stop)`` with constant bias and switches (a clipped phase)."""
 
     start: int
@@ -94,7 +94,7 @@ class StepParams:
         Bias per step (float64, or int64 in integer arithmetic).
     input_on, spiking_on : ndarray of bool
         The two switches per step.
-    segments : tuple of Segment
+    spans : tuple of PhaseSpan
         The phase schedule clipped to ``[0, n_steps)``.
     integer : bool
         Integer (fixed-point) arithmetic.
@@ -113,7 +113,7 @@ class StepParams:
     bias: np.ndarray
     input_on: np.ndarray
     spiking_on: np.ndarray
-    segments: tuple[Segment, ...]
+    spans: tuple[PhaseSpan, ...]
     integer: bool = False
     scale: np.ndarray | None = None
 
@@ -157,14 +157,14 @@ class StepParams:
         --------
         >>> from compiler.snn import NeuronParams, Phase
         >>> p = NeuronParams(phases=(Phase(start_step=0), Phase(start_step=3, bias=2.0)))
-        >>> [tuple(s) for s in StepParams.from_params(p, n_steps=5, integer=True).segments]
+        >>> [tuple(s) for s in StepParams.from_params(p, n_steps=5, integer=True).spans]
         [(0, 3, 0, True, True), (3, 5, 2, True, True)]
         """
         bias, input_on, spiking_on = params.schedule(n_steps)
         cast = int if integer else float
         starts = [ph.start_step for ph in params.phases] + [n_steps]
-        segments = tuple(
-            Segment(start, min(stop, n_steps), cast(ph.bias), ph.input_on, ph.spiking_on)
+        spans = tuple(
+            PhaseSpan(start, min(stop, n_steps), cast(ph.bias), ph.input_on, ph.spiking_on)
             for ph, start, stop in zip(params.phases, starts, starts[1:], strict=False)
             if start < n_steps
         )
@@ -177,7 +177,7 @@ class StepParams:
             bias=bias.astype(np.int64) if integer else bias,
             input_on=input_on,
             spiking_on=spiking_on,
-            segments=segments,
+            spans=spans,
             integer=integer,
             scale=_flat_scale(params, shape, integer),
         )

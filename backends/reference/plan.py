@@ -20,7 +20,6 @@ from backends.reference.gate import GateInputs, gate_inputs
 from backends.reference.neuron import StepParams
 from backends.reference.resonator import ResonatorStepParams
 from compiler.snn.network import Population, SpikingNetwork
-from compiler.snn.projections import Projection
 from compiler.snn.resonator import ResonatorParams
 from ir.errors import SimulationError
 
@@ -84,7 +83,7 @@ class SimPlan:
 def build_plan(
     network: SpikingNetwork,
     arithmetic: str = "float64",
-    builders: Mapping[str, Callable[..., Delivery]] = DELIVERY_BUILDERS,
+    builders: Mapping[type, Callable[..., Delivery]] = DELIVERY_BUILDERS,
 ) -> SimPlan:
     """Validate ``network`` and precompute what simulating it needs.
 
@@ -96,7 +95,7 @@ def build_plan(
         ``int64`` requires whole-number weights, thresholds, resets and biases
         and decays that are multiples of ``1/4096``.
     builders : mapping
-        Delivery builder per projection ``kind`` (default :data:`DELIVERY_BUILDERS`).
+        Delivery builder per projection type (default :data:`DELIVERY_BUILDERS`).
 
     Returns
     -------
@@ -133,15 +132,15 @@ def build_plan(
     integer = arithmetic == "int64"
     pops = network.population
     for proj in network.projections:
-        if proj.kind not in builders:
+        if type(proj) not in builders:
             raise SimulationError(f"projection {proj.id!r}: no delivery for kind {proj.kind!r}; "
-                                  f"known kinds: {sorted(builders)}", node=proj.id)
+                                  f"known kinds: {_kinds(builders)}", node=proj.id)
     if integer:
         _check_integer(network)
     neurons = {p.id: (ResonatorStepParams.of if isinstance(p.params, ResonatorParams)
                       else StepParams.from_params)(p.params, network.n_steps, integer, p.shape)
                for p in network.populations if not p.source}
-    deliveries = {q.id: builders[q.kind](q, pops[q.source], pops[q.target], integer)
+    deliveries = {q.id: builders[type(q)](q, pops[q.source], pops[q.target], integer)
                   for q in network.projections}
     if not all(p.params.reset == "fire_once" for p in network.populations if not p.source):
         # no closed form for this network: dense steps may use BLAS (rate codes)
@@ -191,11 +190,9 @@ def closed_form_problems(network: SpikingNetwork) -> list[str]:
     return problems
 
 
-#: The stored weights of a projection, by ``kind`` (for the integer check).
-_WEIGHTS: dict[str, Callable[[Projection], np.ndarray]] = {
-    "matrix": lambda p: p.weights if p.weights is not None else p.values,
-    "stencil": lambda p: p.kernel,
-}
+def _kinds(builders: Mapping[type, Callable[..., Delivery]]) -> list[str]:
+    """The ``kind`` tags of the projection types in ``builders``, sorted (for messages)."""
+    return sorted(getattr(t, "kind", t.__name__) for t in builders)
 
 
 def _check_integer(network: SpikingNetwork) -> None:
@@ -209,7 +206,7 @@ def _check_integer(network: SpikingNetwork) -> None:
                 f"v_reset={p.v_reset}, biases={[ph.bias for ph in p.phases]}, du={p.du}, "
                 f"dv={p.dv}; {fix}", node=pop.id)
     for proj in network.projections:
-        w = np.asarray(_WEIGHTS.get(proj.kind, lambda p: np.zeros(0))(proj))
+        w = np.asarray(proj.stored_weights())
         bad = w != np.rint(w)
         if bad.any():
             raise SimulationError(

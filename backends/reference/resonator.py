@@ -16,7 +16,7 @@ Per step, with ``d`` the summed input folded from the four compartments
 
 with ``a^m = ρ^m e^{imθ}`` evaluated directly (no repeated products); the charging
 stage uses the ramp neurons' analytic crossing
-(:func:`backends.reference.segments.charge`).  In fixed point (``coef_bits > 0``) the
+(:func:`backends.reference.spans.charge`).  In fixed point (``coef_bits > 0``) the
 rounding makes the recurrence non-linear: the closed form then replays the step
 arithmetic over the drive histogram (bit-identical).  In floating point the two
 engines agree to rounding (``tests/test_resonator_sim.py``).
@@ -218,14 +218,14 @@ def solve_resonator(params: ResonatorStepParams, drive_of, n: int, first: np.nda
     first : ndarray of int64
         First spike step per compartment (−1: none), filled in place.
     charge : callable
-        :func:`backends.reference.segments.charge`.
+        :func:`backends.reference.spans.charge`.
     """
     n_res = n // N_COMPARTMENTS
     state = ResonatorState.zeros(n_res, params.integer)
     x, y, v = state.x, state.y, state.v
     c, s = params.tiled(n_res)
     chunk = max(1, (4 << 20) // max(1, n))
-    for seg in params.segments:
+    for seg in params.spans:
         if not seg.input_on:
             _, v = charge(v, first, seg, params)
             continue

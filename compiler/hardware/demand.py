@@ -122,10 +122,10 @@ class DemandModel:
             if p.source == population:
                 outgoing.setdefault(p.target, []).append(projection_info(p, tgt, pops[p.target]))
         self._outgoing = list(outgoing.values())
-        self._degree = [(i.proj.axes, stencil_degree_map(i.proj, tgt, incoming=True))
-                        for i in incoming if i.proj.kind == "stencil"]
-        self._matrices = [i for i in incoming if i.proj.kind == "matrix"]
-        self._kernel_taps = sum(len(i.offsets) for i in incoming if i.proj.kind == "stencil")
+        self._degree = [(i.proj.axes, i.proj.degree_map(tgt, incoming=True))
+                        for i in incoming if not i.shared_matrix]
+        self._matrices = [i for i in incoming if i.shared_matrix]
+        self._kernel_taps = sum(i.kernel_taps for i in incoming)
         self._whole: tuple[int, int, int] | None = None  # one block: fan-out, unshared, shared
         self._prefix: dict | None = None                 # per-neuron prefix sums, when cut
         self._fan_in: dict[bytes, np.ndarray] = {}

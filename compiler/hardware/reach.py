@@ -32,58 +32,15 @@ Examples
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from compiler.hardware.blocks import Blocks
-from compiler.hardware.intsets import unique_inverse
 from compiler.hardware.projection_info import ProjectionInfo, projection_info
-from compiler.hardware.synapses import coords, ravel, strides
 from compiler.snn import Population, SpikingNetwork
 
 __all__ = ["reach_sweep", "sweep_infos"]
 
 _CHUNK = 1 << 21          # neuron x tap pairs handled at once
 _MARK_LIMIT = 1 << 25     # booleans in one (blocks x source neurons) mark matrix
-
-
-def _matrix_reached(info: ProjectionInfo, src: Population, tgt: Population, flat: np.ndarray,
-                    blk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(block, source)`` pairs reached by target neurons ``flat`` in blocks ``blk``."""
-    proj = info.proj
-    rep_axes = tuple(a for a in tgt.axes if a not in proj.produce)
-    p = ravel(coords(tgt, flat, proj.produce), [tgt.shape[a] for a in proj.produce])
-    s_str = strides(src)
-    base = np.zeros_like(flat)
-    for a, c in zip(rep_axes, coords(tgt, flat, rep_axes), strict=True):
-        base += c * s_str[a]
-    pair_key, pair_id = unique_inverse(blk * src.size + base)
-    ind = sp.csr_matrix((np.ones(flat.size, bool), (pair_id, p)),
-                        shape=(pair_key.size, proj.n_out))
-    hit = (ind @ info.pattern_t).tocsr()
-    row = np.repeat(np.arange(pair_key.size), np.diff(hit.indptr))
-    return (pair_key // src.size)[row], (pair_key % src.size)[row] + info.offsets[hit.indices]
-
-
-def _stencil_reached(info: ProjectionInfo, src: Population, tgt: Population, flat: np.ndarray,
-                     blk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    proj, offsets = info.proj, info.offsets
-    n_taps = len(offsets)
-    cs = coords(tgt, flat, proj.axes)
-    st = strides(tgt)
-    src_idx = np.repeat(flat[:, None], n_taps, axis=1)
-    valid = np.ones((flat.size, n_taps), bool)
-    for i, a in enumerate(proj.axes):
-        c = cs[i][:, None] + offsets[None, :, i]
-        n = tgt.shape[a]
-        if proj.edge[i] == "wrap":
-            c = c % n
-        else:
-            valid &= (c >= 0) & (c < n)
-        src_idx += (c - cs[i][:, None]) * st[a]
-    return np.broadcast_to(blk[:, None], valid.shape)[valid], src_idx[valid]
-
-
-_REACHED = {"matrix": _matrix_reached, "stencil": _stencil_reached}
 
 
 def _chunks(edges: np.ndarray, g0: int, g1: int, step: int) -> list[tuple[int, int]]:
@@ -132,11 +89,10 @@ def sweep_infos(pops: dict[str, Population], tgt: Population, infos: list[Projec
     pairs: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {s: [] for s in by_source}
     # a source reached by one matrix only gets distinct (block, source) pairs from chunks of
     # whole blocks (distinct (block, r) rows, distinct columns c per row); others are marked
-    marked = [s for s, v in by_source.items() if len(v) > 1 or v[0].proj.kind == "stencil"]
+    marked = [s for s, v in by_source.items() if len(v) > 1 or not v[0].shared_matrix]
     biggest = max((pops[s].size for s in marked), default=1)
     per_group = max(1, _MARK_LIMIT // biggest) if marked else max(nb, 1)
-    taps = max([len(i.offsets) for v in by_source.values() for i in v
-                if i.proj.kind == "stencil"] + [1])
+    taps = max([i.reach_taps for v in by_source.values() for i in v] + [1])
     step = max(1, _CHUNK // taps)
     for g0 in range(0, nb, per_group):
         g1 = min(nb, g0 + per_group)
@@ -146,7 +102,7 @@ def sweep_infos(pops: dict[str, Population], tgt: Population, infos: list[Projec
             flat, blk = blocks.flat(pos), blocks.block_of(pos)
             for s, infos in by_source.items():
                 for info in infos:
-                    rows, cols = _REACHED[info.proj.kind](info, pops[s], tgt, flat, blk)
+                    rows, cols = info.reached(pops[s], tgt, flat, blk)
                     if s in marks:
                         marks[s][rows - g0, cols] = True
                     else:

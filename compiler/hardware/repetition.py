@@ -5,7 +5,7 @@ node (a population without an origin is a stage of its own id).  Its
 **repetitions** :math:`R` is the gcd of the repetition counts of the projections
 into it: a matrix shared over pass-through axes is applied
 :math:`\text{source.size} / n_{in}` times, a stencil counts 1 (the rule of the
-seed's Table 3, used by the report).
+paper 000's Table 3, used by the report).
 
 The **repetition axes** of a stage are the pass-through axes (neither contracted
 nor produced) that every projection into it shares; every projection into a
@@ -40,7 +40,7 @@ from math import gcd, prod
 import numpy as np
 
 from compiler.hardware.synapses import synapse_instances
-from compiler.snn import MatrixProjection, Population, SpikingNetwork
+from compiler.snn import Population, SpikingNetwork
 
 __all__ = ["Stage", "instance_neurons", "projection_repetitions", "stage_key", "stages"]
 
@@ -61,10 +61,7 @@ def projection_repetitions(proj, pops) -> int:
     >>> projection_repetitions(k, {"a": Population(id="a", shape={"r": 4})})
     1
     """
-    if isinstance(proj, MatrixProjection):
-        src = pops[proj.source]
-        return src.size // prod(src.shape[a] for a in proj.contract)
-    return 1
+    return proj.repetitions(pops[proj.source])
 
 
 @dataclass(frozen=True)
@@ -107,9 +104,7 @@ class Stage:
 
 
 def _pass_through(proj, pops) -> set[str] | None:
-    if not isinstance(proj, MatrixProjection):
-        return None
-    return {a for a in pops[proj.target].axes if a not in proj.produce}
+    return proj.repetition_axes(pops[proj.target])
 
 
 def stages(network: SpikingNetwork) -> list[Stage]:

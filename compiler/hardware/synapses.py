@@ -5,8 +5,9 @@ the pass-through (repetition) axes; a stencil's are its non-zero taps at every
 target position, minus the taps that fall off a ``clip`` edge.  The helpers here
 also convert flat (row-major) neuron indices to coordinates along named axes.
 
-Projections are treated as immutable: a matrix's non-zero pattern is computed once
-per projection object and remembered while the object lives.
+The counts themselves are the projection kinds' own (``wired_synapses``,
+``nonzero_pattern``, ``degree_map``: see :mod:`compiler.snn.projections`); the
+functions here keep their names for the hardware modules.
 
 Examples
 --------
@@ -19,18 +20,14 @@ Examples
 from __future__ import annotations
 
 from math import prod
-from weakref import WeakKeyDictionary
 
 import numpy as np
 import scipy.sparse as sp
 
-from compiler.snn import MatrixProjection, Population, SpikingNetwork, StencilProjection
+from compiler.snn import MatrixProjection, Population, Projection, SpikingNetwork, StencilProjection
 
 __all__ = ["coords", "nonzero_pattern", "ravel", "stencil_degree_map", "stored_synapses",
            "strides", "synapse_instances"]
-
-_PATTERNS: WeakKeyDictionary[MatrixProjection, sp.csr_matrix] = WeakKeyDictionary()
-
 
 def strides(pop: Population) -> dict[str, int]:
     """Row-major stride of every axis of ``pop``."""
@@ -53,7 +50,7 @@ def ravel(cs: list[np.ndarray], sizes: list[int]) -> np.ndarray:
 
 
 def nonzero_pattern(proj: MatrixProjection) -> sp.csr_matrix:
-    """Boolean ``(n_in, n_out)`` pattern of the non-zero weights (computed once per projection).
+    """Boolean ``(n_in, n_out)`` pattern of the non-zero weights (``proj.nonzero_pattern``).
 
     Examples
     --------
@@ -62,19 +59,7 @@ def nonzero_pattern(proj: MatrixProjection) -> sp.csr_matrix:
     >>> nonzero_pattern(w).toarray().tolist()
     [[True, False], [True, True]]
     """
-    found = _PATTERNS.get(proj)
-    if found is not None:
-        return found
-    if proj.weights is not None:
-        m = sp.csr_matrix(proj.weights != 0)
-    else:
-        keep = proj.values != 0
-        m = sp.csr_matrix((np.ones(int(keep.sum()), bool), (proj.rows[keep], proj.cols[keep])),
-                          shape=proj.n_in_out)
-        m.sum_duplicates()
-        m = m.astype(bool)
-    _PATTERNS[proj] = m
-    return m
+    return proj.nonzero_pattern
 
 
 def stencil_degree_map(proj: StencilProjection, pop: Population, *, incoming: bool) -> np.ndarray:
@@ -91,21 +76,10 @@ def stencil_degree_map(proj: StencilProjection, pop: Population, *, incoming: bo
     >>> stencil_degree_map(k, Population(id="b", shape={"r": 4}), incoming=True).tolist()
     [2, 3, 3, 2]
     """
-    mask = (proj.kernel != 0).astype(np.float64)
-    inside = np.ones([pop.shape[a] for a in proj.axes])
-    pad = [(r, r) for r in proj.radius]
-    for ax, (edge, width) in enumerate(zip(proj.edge, pad, strict=True)):
-        widths = [(0, 0)] * inside.ndim
-        widths[ax] = width
-        inside = np.pad(inside, widths, mode="wrap" if edge == "wrap" else "constant")
-    from scipy import signal  # imported here: scipy.signal takes ~1 s to import
-
-    op = signal.correlate if incoming else signal.convolve
-    return np.rint(op(inside, mask, mode="valid")).astype(np.int64)
+    return proj.degree_map(pop, incoming=incoming)
 
 
-def synapse_instances(proj: MatrixProjection | StencilProjection,
-                      pops: dict[str, Population]) -> int:
+def synapse_instances(proj: Projection, pops: dict[str, Population]) -> int:
     """Synapses of ``proj`` counting every repetition; stencil taps off a ``clip`` edge excluded.
 
     Examples
@@ -115,13 +89,7 @@ def synapse_instances(proj: MatrixProjection | StencilProjection,
     ...                                     kernel=np.ones(3), edge=("clip",)), pops)
     10
     """
-    if isinstance(proj, StencilProjection):
-        tgt = pops[proj.target]
-        deg = stencil_degree_map(proj, tgt, incoming=True)
-        return int(deg.sum()) * (tgt.size // deg.size)
-    src = pops[proj.source]
-    reps = src.size // prod(src.shape[a] for a in proj.contract)
-    return reps * int(nonzero_pattern(proj).nnz)
+    return proj.wired_synapses(pops[proj.source], pops[proj.target])
 
 
 def stored_synapses(network: SpikingNetwork, shared_weights: bool) -> int:

@@ -31,9 +31,9 @@ from compiler.snn import (
     Decoder,
     Encoder,
     LatencyCode,
+    PartLayout,
     Population,
     RateCode,
-    Split,
 )
 from ir import Graph
 from ir.errors import CompileError
@@ -144,7 +144,7 @@ class LoweringContext:
         return HostValue(node=value.node, type=value.type)
 
     def encode(self, value: Value, *, consumer: str, code: LatencyCode | RateCode,
-               split: Split = "none", motif: str,
+               split: PartLayout = "none", motif: str,
                normalize_axes: tuple[str, ...] = (), saturate: bool = False) -> Population:
         """A source population in the open network that carries ``value`` with ``code``.
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.snn import N_PARTS, PART_AXIS, Split
+from compiler.snn import N_PARTS, PART_AXIS, PartLayout
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
 from ir.types import TensorType
@@ -87,15 +87,15 @@ class DftAxes:
     repeat: dict[str, int]
     complex_in: bool
 
-    def contract(self, split: Split) -> tuple[str, ...]:
+    def contract(self, split: PartLayout) -> tuple[str, ...]:
         """Source axes the matrix projection contracts for an input ``split``."""
         return (self.axis, PART_AXIS) if N_PARTS[split] else (self.axis,)
 
-    def produce(self, split: Split) -> tuple[str, ...]:
+    def produce(self, split: PartLayout) -> tuple[str, ...]:
         """Target axes produced for an output ``split``."""
         return (self.out_axis, PART_AXIS) if N_PARTS[split] else (self.out_axis,)
 
-    def out_shape(self, out_type: TensorType, split: Split) -> dict[str, int]:
+    def out_shape(self, out_type: TensorType, split: PartLayout) -> dict[str, int]:
         """The output population's shape: the IR output axes, plus ``part`` if split."""
         shape = dict(out_type.axes)
         if N_PARTS[split]:
@@ -168,7 +168,7 @@ def op_weights(op: Op, n_in: int, *, node: str = "") -> np.ndarray:
                        "motifs lower 'dft', 'linear' and 'window' only", node=node or None)
 
 
-def real_weights(w: np.ndarray, in_split: Split, out_split: Split) -> np.ndarray:
+def real_weights(w: np.ndarray, in_split: PartLayout, out_split: PartLayout) -> np.ndarray:
     r"""The real ``(n_in·P_in, n_out·P_out)`` matrix ``M`` of the module docstring.
 
     Rows are the source ``(axis, part)`` flattened row-major, columns the target

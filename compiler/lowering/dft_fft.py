@@ -86,7 +86,7 @@ STAGE_HEADROOM = 1.0
 
 @dataclass(frozen=True)
 class SfftResources:
-    """The S-FFT's analytic cost (NOTES §1.2, seed 000 Table 3): ``L = log4 N`` layers.
+    """The S-FFT's analytic cost (NOTES §1.2, paper 000 Table 3): ``L = log4 N`` layers.
 
     Attributes
     ----------
@@ -134,7 +134,7 @@ def sfft_resources(n: int, t_steps: int) -> SfftResources:
 
     Notes
     -----
-    Seed 000's Table 3 row (512 inputs, 4 608 neurons, 37 888 synapses, 550 steps)
+    Paper 000's Table 3 row (512 inputs, 4 608 neurons, 37 888 synapses, 550 steps)
     is this formula at ``N = 512, T = 100``, ``L = 4.5``.  The compiled network has
     ``ceil`` layers (a radix-2 layer counts as a whole layer of ``2N`` neurons), stores
     only non-zero synapses (at most ``16N`` per layer) and adds the clock neurons and

@@ -1,4 +1,4 @@
-r"""The ``rate`` motif of ``dft`` / ``linear``: a two-ReLU rate-coded spiking DFT (seed 003, §2.1).
+r"""The ``rate`` motif of ``dft`` / ``linear``: a two-ReLU rate-coded spiking DFT (paper 003, §2.1).
 
 One complex output bin is four non-leaky IF neurons on the trailing ``part``
 axis, carrying :math:`\mathrm{relu}(\pm\mathrm{Re}\,y)` and
@@ -78,7 +78,7 @@ from compiler.lowering.dft_common import dft_axes, op_weights, real_weights
 from compiler.lowering.options import RateOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
-from compiler.snn import Decoder, NeuronParams, Phase, RateCode, Split
+from compiler.snn import Decoder, NeuronParams, PartLayout, Phase, RateCode
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op
 
@@ -170,7 +170,7 @@ def normalize_axes_of(ctx: LoweringContext, node: str) -> tuple[str, ...]:
     return tuple(axes or ())
 
 
-def worst_case_bound(m: np.ndarray, in_split: Split, x_bound: float) -> float:
+def worst_case_bound(m: np.ndarray, in_split: PartLayout, x_bound: float) -> float:
     r"""The largest ``|Re|``/``|Im|`` an output can reach when every input part is ``<= x_bound``.
 
     .. math:: Y = X \max_{k,q} \sum_{l,c} \max_{\pm} |M_{(l,c,\pm),(k,q)}|
@@ -213,7 +213,7 @@ def _rate_input(ctx: LoweringContext, node: str, value: Value, steps: int):
     if (isinstance(value, SpikeValue) and value.network == ctx.network_index
             and code.get("kind") == MOTIF and code.get("steps") == steps):
         return value.population, "re_im_signed", code["scale"], code["bound"]
-    split: Split = "re_im_signed" if ctx.types[value.node].complex else "signed"
+    split: PartLayout = "re_im_signed" if ctx.types[value.node].complex else "signed"
     found = calibrated_bound(ctx, value.node)
     x_bound = found if found else ctx.settings_of(RateOptions).input_range
     rate_code = RateCode(x_min=0.0, x_max=x_bound, max_rate=INPUT_RATE, phase=INPUT_PHASE)

@@ -1,13 +1,8 @@
 r"""The time-coded S-FT motif (``time``, default for ``dft``): one spike per neuron, two stages.
 
-A *time-linear code* carries non-negative part values ``z`` by one spike each:
-``z = s·(E − t)`` for a spike at step ``t < E`` (no spike: ``z = 0``), with the
-code's *end* ``E`` and *scale* ``s``.  Signed and complex values use ± parts
-(``signed``: ``(x⁺, x⁻)``; ``re_im_signed``: ``(Re⁺, Re⁻, Im⁺, Im⁻)``), so no value
-ever needs an offset.  The encoder of a host value ``x`` uses
-``LatencyCode(t_max=T, x_min=0, x_max=X)``: ``t = T − rint(z·T/X)``, i.e. ``E = T``,
-``s = X/T`` (``X`` from the calibrate pass: ``max_part · headroom``, or 1 for
-``per-input``, whose encoder normalises each slice).
+Values travel in the *time-linear codes* of :mod:`compiler.lowering.time_code`
+(part value ``z = s·(E − t)`` for a spike at step ``t < E``, ± parts for signed and
+complex values; a host value is encoded with ``E = T``, ``s = X/T``).
 
 A layer ``y = M x`` (``M`` from :func:`~compiler.lowering.dft_common.real_weights`)
 is one population of non-leaky ramp neurons (``du = dv = 0``, fire-once):
@@ -46,11 +41,9 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.calibration import NodeCalibration
 from compiler.lowering.charging import (
     GUARD_MIN_RATIO,
     choose_schedule,
@@ -70,25 +63,25 @@ from compiler.lowering.stage_gains import (
     pow2_gains,
     stage_gains,
 )
-from compiler.lowering.time_inputs import (
-    TimeInputOptions,
-    encoder_headroom,
-    graded_readout,
-    guard_of,
-    input_rounding,
+from compiler.lowering.time_code import (
+    DEFAULT_TIME_STEPS,
+    LayerInput,
+    TimeCode,
+    calibration_of,
+    headroom_of,
+    time_source,
+    time_steps,
 )
+from compiler.lowering.time_inputs import graded_readout, guard_of
 from compiler.lowering.values import SpikeValue, Value
 from compiler.quantize_weights import weight_bits_of
 from compiler.snn import (
     N_PARTS,
-    PART_AXIS,
     Decoder,
-    Encoder,
-    LatencyCode,
     NeuronParams,
+    PartLayout,
     Phase,
     Population,
-    Split,
 )
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
@@ -97,117 +90,13 @@ __all__ = ["DEFAULT_TIME_STEPS", "TimeCode", "LayerInput", "calibration_of", "he
            "integer_target", "layer_weight_bits",
            "time_source", "time_layer", "lower_time_linear", "register_time"]
 
-#: Charging (and encoding) window ``T`` when the ``time_steps`` option is not given.
-DEFAULT_TIME_STEPS = TimeDftOptions().time_steps  # declared in compiler.lowering.options
-_KIND = "time-linear"
-
-
-@dataclass(frozen=True)
-class TimeCode:
-    """A time-linear code: part value ``scale·(end − t)`` for a spike at ``t``.
-
-    With ``gain_axis``, the part at index ``i`` of that axis carries
-    ``gains[i]`` times the value (see the module docstring).
-
-    Examples
-    --------
-    >>> TimeCode(end=8, scale=0.5, split="signed").as_code()
-    {'kind': 'time-linear', 'end': 8, 'scale': 0.5, 'split': 'signed'}
-    >>> TimeCode(8, 0.5, "none", gain_axis="range", gains=(1.0, 2.0)).as_code()["gains"]
-    [1.0, 2.0]
-    """
-
-    end: int
-    scale: float
-    split: Split
-    gain_axis: str | None = None
-    gains: tuple[float, ...] = ()
-
-    def as_code(self) -> dict:
-        """The JSON-able ``SpikeValue.code``."""
-        code = {"kind": _KIND, "end": self.end, "scale": self.scale, "split": self.split}
-        if self.gain_axis is not None:
-            code.update(gain_axis=self.gain_axis, gains=list(self.gains))
-        return code
-
-
-@dataclass(frozen=True)
-class LayerInput:
-    """One projection into a time layer: ``source`` population, real matrix, axes."""
-
-    source: str
-    matrix: np.ndarray
-    contract: tuple[str, ...]
-    produce: tuple[str, ...]
-    second_moment: np.ndarray | None = None  # E[v vᵀ] of the rows' inputs (weight rounding)
-
-
-def _steps(ctx: LoweringContext) -> int:
-    t = ctx.settings_of(TimeDftOptions).time_steps
-    if t < 2:
-        raise CompileError(f"time_steps={t} is too short for a time code; use >= 2 (256 typical)")
-    return t
-
-
-def calibration_of(ctx: LoweringContext, node: str, consumer: str) -> NodeCalibration:
-    """The calibrate pass's record of ``node`` (raises a clear error without one)."""
-    rec = ctx.calibration.get(node)
-    if rec is None:
-        raise CompileError(f"node {consumer!r}: time-coded motifs need the range of {node!r}, "
-                           "which was not calibrated; run the 'calibrate' pass before 'lower' "
-                           "and give calibration_inputs={input: array} or "
-                           "input_bounds={input: max |value|} (or calibration='per-input')",
-                           node=consumer)
-    return rec
-
-
-def headroom_of(ctx: LoweringContext) -> float:
-    """The calibration headroom (option ``headroom``, default 1)."""
-    return ctx.settings_of(TimeDftOptions).headroom
-
-
-def time_source(ctx: LoweringContext, consumer: str, value: Value, *, motif: str,
-                gains_ok: bool = False) -> tuple[str, TimeCode]:
-    """A population carrying ``value`` in a time-linear code, and that code.
-
-    Spikes of a time-linear value in the open network are read directly (if
-    they carry stage gains, only by a consumer that handles them,
-    ``gains_ok``); anything else is encoded from the host (a visible boundary)
-    with the calibrated range, split into ± parts.
-    """
-    if (isinstance(value, SpikeValue) and value.code.get("kind") == _KIND
-            and value.network == ctx.network_index and (gains_ok or not value.code.get("gains"))):
-        c = value.code
-        return value.population, TimeCode(int(c["end"]), float(c["scale"]), c["split"],
-                                          c.get("gain_axis"), tuple(c.get("gains", ())))
-    host = ctx.to_host(value)
-    rec = calibration_of(ctx, host.node, consumer)
-    t = _steps(ctx)
-    setting = ctx.settings_of(TimeInputOptions).encoder_headroom
-    full = rec.max_part * headroom_of(ctx) * encoder_headroom(rec, setting) or 1.0
-    split: Split = "re_im_signed" if host.type.complex else "signed"
-    builder = ctx.builder()
-    if builder.has_encoder(host.node):
-        raise CompileError(f"node {consumer!r}: value {host.node!r} is already encoded in this "
-                           "network by another consumer; give it one motif", node=consumer)
-    shape = {**host.type.axes, PART_AXIS: N_PARTS[split]}
-    pop = builder.population(consumer, "in", shape, motif=motif, source=True)
-    builder.encoder(Encoder(port=host.node, population=pop.id, split=split, node=host.node,
-                            code=LatencyCode(t_min=0, t_max=t, x_min=0.0, x_max=full,
-                                             rounding=input_rounding(ctx, consumer, rec,
-                                                                     full / t, split)),
-                            normalize_axes=rec.normalize_axes))
-    builder.meta["calibration"] = ctx.settings_of(TimeDftOptions).calibration
-    return pop.id, TimeCode(end=t, scale=full / t, split=split)
-
-
 def _allow_companding(ctx: LoweringContext, node: str) -> bool:
     """Companding only where every consumer takes the value on the host."""
     return all(ctx.motif_for(c) == HOST for c in ctx.graph.consumers_of(node))
 
 
 def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[LayerInput], *,
-               shape: dict[str, int], split: Split, full_scale: float,
+               shape: dict[str, int], split: PartLayout, full_scale: float,
                samples: tuple[float, ...] = (), motif: str = "time",
                gain_axis: str | None = None, gains: tuple[float, ...] = (),
                weight_bits: int | None = None, neuron_gains: bool = False) -> SpikeValue:
@@ -246,7 +135,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
     SpikeValue
         Time-linear code for the constant schedule, ``time-table`` for companding.
     """
-    t = _steps(ctx)
+    t = time_steps(ctx)
     bits = weight_bits or layer_weight_bits(ctx, node)
     stacked = np.concatenate([i.matrix.ravel() for i in inputs])
     whole = integer_target(ctx) and (getattr(ctx.target, "bias_mantissa_bits", None) or True)
@@ -343,7 +232,7 @@ def _host_moment(ctx: LoweringContext, value: Value, axis: str) -> np.ndarray | 
     return None if rec is None else getattr(rec, "second_moments", {}).get(axis)
 
 
-def _out_split(complex_out: bool) -> Split:
+def _out_split(complex_out: bool) -> PartLayout:
     return "re_im_signed" if complex_out else "signed"
 
 
@@ -371,7 +260,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
         peak = float(np.abs(m0).max(initial=0.0))
         unit = (peak / (2 ** (layer_weight_bits(ctx, node) - 1) - 1) * code_in.scale
                 if neurons and peak > 0 else None)
-        start = stage_gains(ctx, node, axes.out_axis, n_rows, t_steps=_steps(ctx),
+        start = stage_gains(ctx, node, axes.out_axis, n_rows, t_steps=time_steps(ctx),
                             stage_rule=lower_time_linear, code_noise=noise, neuron_unit=unit)
     rec = calibration_of(ctx, node, node)
     full, samples = gained_range(rec, gain_axis, gains, headroom_of(ctx))
@@ -393,7 +282,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
     m = real_weights(w, code_in.split, split)
     bits = None
     if scaled and ctx.settings_of(TimeDftOptions).weight_bits is None:
-        bits = exact_weight_bits(_steps(ctx), n_rows)
+        bits = exact_weight_bits(time_steps(ctx), n_rows)
     layer_in = LayerInput(source, m, axes.contract(code_in.split), axes.produce(split),
                           _host_moment(ctx, x, axes.axis))
     return time_layer(ctx, node, code_in, [layer_in], shape=axes.out_shape(out_type, split),
@@ -405,6 +294,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
 def register_time(registry: LoweringRegistry) -> None:
     """Register the time-coded family: ``time`` for ``dft`` (default), ``linear``, ``window``;
     ``l1`` and ``amb`` (α-max-β-min) for ``magnitude``."""
+    # cycle: compiler.lowering.magnitude imports time_layer from this module at its top
     from compiler.lowering.magnitude import register_magnitude
 
     registry.register(DFT, "time", lower_time_linear, default=True)

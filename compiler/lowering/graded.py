@@ -15,16 +15,16 @@ from compiler.lowering.context import LoweringContext
 from compiler.lowering.layer_weights import coarsen, connect_levels
 from compiler.lowering.time_inputs import guard_of
 from compiler.lowering.values import SpikeValue
-from compiler.snn import N_PARTS, Decoder, NeuronParams, Phase, Population, Split
+from compiler.snn import N_PARTS, Decoder, NeuronParams, PartLayout, Phase, Population
 
 if TYPE_CHECKING:
-    from compiler.lowering.dft_time import LayerInput, TimeCode
+    from compiler.lowering.time_code import LayerInput, TimeCode
 
 __all__ = ["graded_layer"]
 
 
 def graded_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[LayerInput],
-                 *, shape: dict[str, int], split: Split, full_scale: float, motif: str,
+                 *, shape: dict[str, int], split: PartLayout, full_scale: float, motif: str,
                  gain_axis: str | None, gains: tuple[float, ...], bits: int,
                  whole: bool) -> SpikeValue:
     """The layer of :func:`time_layer` read out as one graded spike per neuron.

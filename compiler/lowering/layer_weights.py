@@ -20,7 +20,7 @@ from ir.errors import CompileError
 
 if TYPE_CHECKING:
     from compiler.lowering.builder import NetworkBuilder
-    from compiler.lowering.dft_time import LayerInput, TimeCode
+    from compiler.lowering.time_code import LayerInput, TimeCode
 
 __all__ = ["Coarsened", "coarsen", "connect_levels", "integer_target", "layer_levels",
            "membrane_unit", "round_levels"]

@@ -37,14 +37,9 @@ from __future__ import annotations
 import numpy as np
 
 from compiler.lowering.context import LoweringContext
-from compiler.lowering.dft_time import (
-    LayerInput,
-    calibration_of,
-    headroom_of,
-    time_layer,
-    time_source,
-)
+from compiler.lowering.dft_time import time_layer
 from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.time_code import LayerInput, calibration_of, headroom_of, time_source
 from compiler.lowering.values import Value
 from compiler.snn import NeuronParams
 from ir.errors import CompileError

@@ -57,7 +57,6 @@ import numpy as np
 from compiler.hardware.formats import bias_value
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
-from compiler.lowering.dft_time import TimeCode, _steps, calibration_of, headroom_of
 from compiler.lowering.options import ResonatorOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.resonator_fixed import (
@@ -68,6 +67,7 @@ from compiler.lowering.resonator_fixed import (
     fixed_coefficients,
     float_coefficients,
 )
+from compiler.lowering.time_code import TimeCode, calibration_of, headroom_of, time_steps
 from compiler.lowering.time_inputs import TimeInputOptions, encoder_headroom
 from compiler.lowering.values import Value
 from compiler.snn import N_PARTS, PART_AXIS, Decoder, Encoder, Phase
@@ -144,7 +144,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     host = ctx.to_host(x)
     in_type = host.type
     axes = dft_axes(node, op, in_type)
-    n, t_out = axes.n_in, _steps(ctx)
+    n, t_out = axes.n_in, time_steps(ctx)
     split_in = "re_im_signed" if in_type.complex else "signed"
     p_in = N_PARTS[split_in]
     rec_in = calibration_of(ctx, host.node, node)

@@ -18,7 +18,7 @@ from compiler.calibration import NodeCalibration
 from compiler.lowering.charging import guard_steps
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.options import TimeInputOptions  # its home; re-exported here
-from compiler.snn import Split
+from compiler.snn import PartLayout
 from compiler.snn.coding import split_values
 from ir.errors import BudgetError, CompileError
 from ir.ops import DFT, Linear, Output, Sum
@@ -65,7 +65,7 @@ def encoder_headroom(rec: NodeCalibration, setting: float | str = "auto") -> flo
 
 
 def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
-                   step_size: float, split: Split) -> str:
+                   step_size: float, split: PartLayout) -> str:
     """How the host encoder of ``consumer``'s input rounds (option ``input_rounding``).
 
     ``auto``: measured on the calibration frames of the value (a graph input).
@@ -101,7 +101,7 @@ def input_rounding(ctx: LoweringContext, consumer: str, rec: NodeCalibration,
 
 
 def repeated_rounding_error(frames: np.ndarray, step: float, repeat: tuple[int, ...],
-                            split: Split) -> float:
+                            split: PartLayout) -> float:
     r"""How much larger the repeated part of nearest rounding's error is than dither's.
 
     With the parts ``p`` of the calibration ``frames`` on the code's grid ``s``, the

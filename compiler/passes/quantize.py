@@ -61,7 +61,6 @@ from compiler.passes.relay import MAX_RELAY_STAGES, LongDelays, relay_long_delay
 from compiler.passes.split import describe
 from compiler.program import CompiledProgram, Segment
 from compiler.snn import DECAY_ONE, NeuronParams, Population, SpikingNetwork
-from compiler.snn.projections import weights_of, with_weights
 from ir.errors import BudgetError
 
 __all__ = ["MAX_RELAY_STAGES", "Quantize", "QuantizeRecord", "quantize", "relay_long_delays"]
@@ -114,7 +113,7 @@ def _exact_unit(pop: Population, incoming: list, peak: float,
         unit = 2.0 ** -j
         if peak / unit > reach:
             return None
-        if _whole(values / unit) and all(_whole(weights_of(p) / unit) for p in incoming):
+        if _whole(values / unit) and all(_whole(p.stored_weights() / unit) for p in incoming):
             decays_exact = _whole(np.array([par.du, par.dv]) * DECAY_ONE)
             return unit if decays_exact else None
     return None
@@ -122,8 +121,8 @@ def _exact_unit(pop: Population, incoming: list, peak: float,
 
 def _split_share(terms: dict[str, list]) -> float:
     """Stored weights of split terms over the first terms' (0: nothing split)."""
-    first = sum(int(np.count_nonzero(weights_of(t[0]))) for t in terms.values())
-    extra = sum(int(np.count_nonzero(weights_of(q))) for t in terms.values() for q in t[1:])
+    first = sum(int(np.count_nonzero(t[0].stored_weights())) for t in terms.values())
+    extra = sum(int(np.count_nonzero(q.stored_weights())) for t in terms.values() for q in t[1:])
     return extra / first if first else 0.0
 
 
@@ -132,7 +131,7 @@ def _state_unit(pop: Population, incoming: list, profile: HardwareProfile,
     """``(s_T, exact)`` for a population (see the module docstring)."""
     w_max = (1 << (profile.weight_bits - 1)) - 1
     e_top = 2.0 ** profile.weight_exponent_max
-    peaks = [float(np.abs(weights_of(p)).max(initial=0.0)) for p in incoming]
+    peaks = [float(np.abs(p.stored_weights()).max(initial=0.0)) for p in incoming]
     peaks = [x for x in peaks if x > 0]
     exact = _exact_unit(pop, incoming, max(peaks, default=0.0), profile) if allow_exact else None
     if exact is not None:
@@ -140,7 +139,7 @@ def _state_unit(pop: Population, incoming: list, profile: HardwareProfile,
     par = pop.params
     if peaks:  # weights already on the one-scale grid (levels made for this width): keep it
         grid = max(peaks) / w_max
-        if all(_near_whole(weights_of(p) / grid) for p in incoming) and grid >= _param_unit(
+        if all(_near_whole(p.stored_weights() / grid) for p in incoming) and grid >= _param_unit(
                 par, profile):
             return grid, False
     unit = min(peaks) / w_max if peaks else 1.0
@@ -219,7 +218,7 @@ def _quantize_params(pop: Population, unit: float, profile: HardwareProfile
 def _projection_terms(p, pop: Population, unit: float, exact: bool,
                       profile: HardwareProfile, record: QuantizeRecord) -> list:
     """``p`` in the target's weight format: itself, plus split terms of an exact weight."""
-    w = weights_of(p)
+    w = p.stored_weights()
     w_max = (1 << (profile.weight_bits - 1)) - 1
     terms = weight_terms(w / unit, w_max, profile.weight_exponent_max, exact=exact)
     q = sum(t for _, t in terms)
@@ -241,8 +240,8 @@ def _projection_terms(p, pop: Population, unit: float, exact: bool,
             f"{profile.name}'s threshold range needs a unit of {unit:.4g}, at which every "
             f"weight of projection {p.id!r} (max {own:.4g}) rounds to zero; use fewer time "
             "steps or a target with wider thresholds", node=pop.origin.get("node", pop.id))
-    out = [with_weights(p, terms[0][1])]
-    out += [replace(with_weights(p, t), id=f"{p.id}__x{i}") for i, (_, t) in
+    out = [p.with_weights(terms[0][1])]
+    out += [replace(p.with_weights(t), id=f"{p.id}__x{i}") for i, (_, t) in
             enumerate(terms[1:], start=1) if t.any()]
     return out
 

@@ -16,7 +16,6 @@ import numpy as np
 from compiler.hardware import HardwareProfile
 from compiler.passes.split import describe
 from compiler.snn import NeuronParams, Population, SpikingNetwork, StencilProjection
-from compiler.snn.projections import weights_of, with_weights
 from ir.errors import BudgetError
 
 if TYPE_CHECKING:
@@ -43,12 +42,12 @@ def _relay_link(src: str, relay: Population, first_axis: str, delay: int, origin
 
 def _split_by_delay(p, limit: int):
     """``(near, far)``: the synapses with delay ≤ limit, and the rest with ``limit`` subtracted."""
-    w, d = weights_of(p), p.delays
+    w, d = p.stored_weights(), p.delays
     far = d > limit
     near_w, far_w = np.where(far, 0.0, w), np.where(far, w, 0.0)
     near_d, far_d = np.where(far, 0, d), np.where(far, d - limit, 0)
-    near = replace(with_weights(p, near_w), delays=near_d)
-    far_p = replace(with_weights(p, far_w), delays=far_d, id=f"{p.id}__far")
+    near = replace(p.with_weights(near_w), delays=near_d)
+    far_p = replace(p.with_weights(far_w), delays=far_d, id=f"{p.id}__far")
     return near, far_p
 
 
@@ -102,7 +101,7 @@ def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_de
             projs.append(p)
             continue
         near, far = _split_by_delay(p, limit)
-        if np.any(weights_of(near) != 0):
+        if np.any(near.stored_weights() != 0):
             projs.append(near)
         key = (p.source.split("__relay")[0], stage + 1)
         if key not in relays:

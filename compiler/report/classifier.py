@@ -1,4 +1,4 @@
-"""The classifier's row of the seed paper's Table 3: inputs, neurons, synapses, steps, instances.
+"""The classifier's row of paper 000's Table 3: inputs, neurons, synapses, steps, instances.
 
 Counted on the lowered network of one ``classifier`` node, **per instance** (one ROI
 sequence; the batch axes, e.g. ``object``, are instances):
@@ -23,9 +23,8 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import prod
 
-from compiler.snn import MatrixProjection, SpikingNetwork
+from compiler.snn import SpikingNetwork
 
 __all__ = ["ClassifierRow", "classifier_row"]
 
@@ -74,12 +73,8 @@ def classifier_row(network: SpikingNetwork, node: str, *, frames: int,
     synapses = 0
     for proj in network.projections:
         if proj.target in {p.id for p in inner}:
-            src = network.population[proj.source]
-            if isinstance(proj, MatrixProjection):
-                per_src = src.size // prod(src.shape[a] for a in proj.contract)
-                synapses += per_src * proj.n_synapses
-            else:
-                synapses += network.population[proj.target].size * proj.n_taps
+            synapses += proj.n_synapse_instances(network.population[proj.source],
+                                                 network.population[proj.target])
     return ClassifierRow(inputs=relay.size // reps, neurons=sum(p.size for p in inner) // reps,
                          synapses=synapses // reps, steps_per_frame=network.n_steps // frames,
                          instances=instances)

@@ -32,8 +32,6 @@ Examples
 
 from __future__ import annotations
 
-from math import prod
-
 from compiler.hardware import load_profile
 
 __all__ = ["format_rows"]
@@ -41,10 +39,7 @@ __all__ = ["format_rows"]
 
 def _instances(net, proj) -> int:
     pops = net.population
-    src = pops[proj.source]
-    if proj.kind == "matrix":
-        return src.size // prod(src.shape[a] for a in proj.contract) * proj.n_synapses
-    return pops[proj.target].size * proj.n_taps
+    return proj.n_synapse_instances(pops[proj.source], pops[proj.target])
 
 
 def format_rows(program) -> list[dict]:

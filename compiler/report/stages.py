@@ -1,4 +1,4 @@
-r"""Per-stage rows (the bottom of the seed's Table 3): one row per IR node of a network.
+r"""Per-stage rows (the bottom of paper 000's Table 3): one row per IR node of a network.
 
 A **stage** is the set of populations whose ``origin["node"]`` is one IR node
 (populations without an origin form a stage of their own id).  Its
@@ -29,16 +29,14 @@ from compiler.hardware.activity import spike_bound
 from compiler.hardware.demand import has_synapse_out, projection_info
 from compiler.hardware.repetition import projection_repetitions as repetitions
 from compiler.hardware.repetition import stages
-from compiler.snn import MatrixProjection, SpikingNetwork
+from compiler.snn import SpikingNetwork
 
 __all__ = ["stage_rows", "nominal_synapses", "repetitions"]
 
 
 def nominal_synapses(proj, pops) -> int:
     """Synapse instances as the paper counts them (stencil: neurons × taps, edges ignored)."""
-    if isinstance(proj, MatrixProjection):
-        return repetitions(proj, pops) * proj.n_synapses
-    return pops[proj.target].size * proj.n_taps
+    return proj.n_synapse_instances(pops[proj.source], pops[proj.target])
 
 
 def _reached(network: SpikingNetwork, source: str, projs: list) -> int:
@@ -46,7 +44,7 @@ def _reached(network: SpikingNetwork, source: str, projs: list) -> int:
     pops = network.population
     pop = pops[source]
     infos = [projection_info(p, pop, pops[p.target]) for p in projs]
-    if all(isinstance(p, MatrixProjection) and p.contract == projs[0].contract for p in projs):
+    if all(i.shared_matrix and i.proj.contract == projs[0].contract for i in infos):
         rownz = np.logical_or.reduce([i.rownz for i in infos])  # same rows in every repetition
         return repetitions(projs[0], pops) * int(rownz.sum())
     total = 0

@@ -1,44 +1,15 @@
-r"""Encoders (values → spikes) and decoders (spikes → values) at a network's ports.
+"""Encoders (values → spikes) and decoders (spikes → values) at a network's ports.
 
 An :class:`Encoder` turns an input array into the spikes of a source
 population; a :class:`Decoder` reads a population's spikes or membrane back
 into values.  Both name a *port* (the key of ``simulate``'s inputs/outputs)
 and the radar-IR node they stand for.
 
-Codes
------
-Linear latency (time-to-first-spike), larger values earlier:
-
-.. math:: t = t_{min} + \frac{x_{max} - x}{x_{max} - x_{min}} (T - t_{min})
-
-Log latency uses ``log x`` in place of ``x`` (``x_min > 0``).  Values are
-clipped to ``[x_min, x_max]``; the time is rounded to a step (``nearest`` or
-``floor``); a spike at ``t = T`` falls outside the window ``[0, T)`` and is not
-emitted (for the ramp neurons that is exactly a zero contribution).
-
-Regular rate code with deterministic phase: the rate is
-``r = r_max (x - x_min)/(x_max - x_min)`` spikes per step and a spike falls on
-step ``t`` iff ``floor((t+1)·r + φ) > floor(t·r + φ)``.
-
-Per-input normalisation (``Encoder.normalize_axes``): before splitting, each
-slice over those axes is divided by its largest ``max(|Re x|, |Im x|)``
-(:func:`normalize_values`; an all-zero slice stays zero), so every chirp or
-frame uses the code's whole range; decoded outputs are then in those
-normalised units.
-
-Value splitting (``split``) puts signed or complex values on a trailing
-``part`` axis: ``re_im`` → (Re, Im); ``signed`` → (relu(x), relu(−x));
-``re_im_signed`` → (relu Re, relu −Re, relu Im, relu −Im).  Decoders'
-``combine`` undoes it.
-
-Examples
---------
->>> import numpy as np
->>> code = LatencyCode(t_min=0, t_max=10, x_min=0.0, x_max=1.0)
->>> code.spike_steps(np.array([1.0, 0.5, 0.0])).tolist()
-[0, 5, 10]
->>> RateCode(x_min=0.0, x_max=1.0, max_rate=0.5).spike_counts(np.array([1.0, 0.5]), 8).tolist()
-[4, 2]
+The value codes they use are in :mod:`compiler.snn.codes` (latency and rate
+codes, dither) and :mod:`compiler.snn.stream`; how signed and complex values
+are spread over a trailing ``part`` axis (an encoder's ``split``, a decoder's
+``combine``) and the per-input normalisation are in :mod:`compiler.snn.parts`.
+This module re-exports both, so ``compiler.snn.coding`` still names every one.
 """
 
 from __future__ import annotations
@@ -46,8 +17,16 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
+from compiler.snn.codes import FrozenModel, LatencyCode, RateCode, dither_offsets
+from compiler.snn.parts import (
+    N_PARTS,
+    PartLayout,
+    combine_parts,
+    normalize_values,
+    split_values,
+)
 from compiler.snn.stream import StreamCode
 from ir.errors import NetworkError
 
@@ -56,7 +35,7 @@ __all__ = [
     "RateCode",
     "Encoder",
     "Decoder",
-    "Split",
+    "PartLayout",
     "split_values",
     "combine_parts",
     "normalize_values",
@@ -64,135 +43,13 @@ __all__ = [
     "N_PARTS",
 ]
 
-Split = Literal["none", "re_im", "signed", "re_im_signed"]
-
-#: Size of the trailing ``part`` axis each split adds (``none`` adds no axis).
-N_PARTS: dict[str, int] = {"none": 0, "re_im": 2, "signed": 2, "re_im_signed": 4}
-
-
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class LatencyCode(_Frozen):
-    """Time-to-first-spike code: one spike per value, larger values earlier.
-
-    Parameters
-    ----------
-    kind : {"linear", "log"}
-        Map ``x`` (or ``log x``) linearly onto the window.
-    t_min, t_max : int
-        Earliest spike step (for ``x_max``) and the window end ``T`` (for ``x_min``;
-        a spike at ``T`` is not emitted).
-    x_min, x_max : float
-        The encoded range; values outside it are clipped.
-    rounding : {"nearest", "floor", "dither"}
-        How the real-valued time becomes a step; ``dither``: ``floor(t + u_i)`` with
-        a fixed offset ``u_i ∈ [0, 1)`` per position ``i`` of the last axis
-        (:func:`dither_offsets`) — unbiased (the mean over ``u`` is ``t``), and a
-        value repeated at many positions (the static part of a signal over
-        chirps) gets independent rounding errors instead of one repeated error.
-    """
-
-    type: Literal["latency"] = "latency"
-    kind: Literal["linear", "log"] = "linear"
-    t_min: int = Field(default=0, ge=0)
-    t_max: int = Field(gt=0)
-    x_min: float
-    x_max: float
-    rounding: Literal["nearest", "floor", "dither"] = "nearest"
-
-    @model_validator(mode="after")
-    def _ranges(self) -> LatencyCode:
-        if not (np.isfinite(self.x_min) and np.isfinite(self.x_max) and self.x_max > self.x_min):
-            raise ValueError(f"need finite x_min < x_max, got {self.x_min}, {self.x_max}")
-        if self.t_min >= self.t_max:
-            raise ValueError(f"need t_min < t_max, got {self.t_min}, {self.t_max}")
-        if self.kind == "log" and self.x_min <= 0:
-            raise ValueError(f"a log code needs x_min > 0, got {self.x_min}")
-        return self
-
-    def spike_times(self, x: np.ndarray) -> np.ndarray:
-        """Real-valued spike times ``t`` in ``[t_min, t_max]`` (before rounding)."""
-        x = np.clip(np.asarray(x, dtype=np.float64), self.x_min, self.x_max)
-        lo, hi = self.x_min, self.x_max
-        if self.kind == "log":
-            x, lo, hi = np.log(x), np.log(lo), np.log(hi)
-        return self.t_min + (hi - x) / (hi - lo) * (self.t_max - self.t_min)
-
-    def spike_steps(self, x: np.ndarray) -> np.ndarray:
-        """Integer spike steps; ``t_max`` means no spike inside the window.
-
-        Rounding ``nearest`` is half-to-even (numpy's ``rint``); ``dither`` offsets each
-        position of the last axis (the encoders pass ``(frames, values)``, a frame's
-        parts flattened in C order).
-        """
-        t = self.spike_times(x)
-        if self.rounding == "dither":
-            t = t + dither_offsets(t.shape[-1] if t.ndim else 1).reshape(t.shape[-1:])
-        steps = np.rint(t) if self.rounding == "nearest" else np.floor(t)
-        return steps.astype(np.int64)
-
-    def value_of(self, steps: np.ndarray) -> np.ndarray:
-        """The value a spike at ``steps`` stands for (the code's inverse).
-
-        Examples
-        --------
-        >>> LatencyCode(t_max=10, x_min=0.0, x_max=1.0).value_of(np.array([0, 5])).tolist()
-        [1.0, 0.5]
-        """
-        lo, hi = self.x_min, self.x_max
-        if self.kind == "log":
-            lo, hi = np.log(lo), np.log(hi)
-        frac = (np.asarray(steps, np.float64) - self.t_min) / (self.t_max - self.t_min)
-        y = hi - frac * (hi - lo)
-        return np.exp(y) if self.kind == "log" else y
-
-
-class RateCode(_Frozen):
-    """Regular spike trains with a deterministic phase.
-
-    Parameters
-    ----------
-    x_min, x_max : float
-        Encoded range; ``x_min`` gives rate 0, ``x_max`` gives ``max_rate``.
-    max_rate : float
-        Spikes per step at ``x_max`` (at most 1).
-    phase : float
-        Phase ``φ`` in ``[0, 1)`` of every train.
-    """
-
-    type: Literal["rate"] = "rate"
-    x_min: float = 0.0
-    x_max: float = 1.0
-    max_rate: float = Field(default=0.5, gt=0.0, le=1.0)
-    phase: float = Field(default=0.0, ge=0.0, lt=1.0)
-
-    @model_validator(mode="after")
-    def _ranges(self) -> RateCode:
-        if not (np.isfinite(self.x_min) and np.isfinite(self.x_max) and self.x_max > self.x_min):
-            raise ValueError(f"need finite x_min < x_max, got {self.x_min}, {self.x_max}")
-        return self
-
-    def rates(self, x: np.ndarray) -> np.ndarray:
-        """Spikes per step for each value."""
-        x = np.clip(np.asarray(x, dtype=np.float64), self.x_min, self.x_max)
-        return self.max_rate * (x - self.x_min) / (self.x_max - self.x_min)
-
-    def spikes_at(self, rates: np.ndarray, t: int) -> np.ndarray:
-        """Boolean spikes of step ``t`` for trains of the given rates."""
-        return np.floor((t + 1) * rates + self.phase) > np.floor(t * rates + self.phase)
-
-    def spike_counts(self, x: np.ndarray, n_steps: int) -> np.ndarray:
-        """Spikes in ``n_steps`` steps: ``floor(n·r + φ) - floor(φ)``."""
-        r = self.rates(x)
-        return (np.floor(n_steps * r + self.phase) - np.floor(self.phase)).astype(np.int64)
-
+#: Deprecated alias of :data:`PartLayout` (the old name clashed with the Split pass).
+Split = PartLayout
 
 Code = LatencyCode | RateCode | StreamCode
 
 
-class Encoder(_Frozen):
+class Encoder(FrozenModel):
     """Feeds an input port's values into a source population.
 
     Parameters
@@ -221,13 +78,13 @@ class Encoder(_Frozen):
     port: str
     population: str
     code: LatencyCode | RateCode | StreamCode = Field(discriminator="type")
-    split: Split = "none"
+    split: PartLayout = "none"
     node: str = ""
     normalize_axes: tuple[str, ...] = ()
     saturate: bool = False
 
 
-class Decoder(_Frozen):
+class Decoder(FrozenModel):
     r"""Reads values back from a population at an output port.
 
     Decoder kinds (``y`` per neuron, before ``combine``):
@@ -286,7 +143,7 @@ class Decoder(_Frozen):
     offset: float = 0.0
     t_ref: float = 0.0
     missing: float = 0.0
-    combine: Split = "none"
+    combine: PartLayout = "none"
     node: str = ""
     table: tuple[float, ...] = ()
     gain_axis: str | None = None
@@ -372,87 +229,3 @@ class Decoder(_Frozen):
             index = np.broadcast_to(index, value.shape)
         np.divide(value, gains, out=value, where=(index > 0) & (index <= n))
         return value
-
-
-def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
-    """Divide each slice over ``axes`` by its largest ``max(|Re|, |Im|)`` (zero slices stay 0).
-
-    Examples
-    --------
-    >>> normalize_values(np.array([[2.0, -4.0], [0.0, 0.0]]), axes=(1,)).tolist()
-    [[0.5, -1.0], [0.0, 0.0]]
-    >>> normalize_values(np.array([3.0 - 6.0j]), axes=(0,)).tolist()
-    [(0.5-1j)]
-    """
-    x = np.asarray(x)
-    if not axes:
-        return x
-    peak = np.maximum(np.abs(np.real(x)), np.abs(np.imag(x))).max(axis=axes, keepdims=True)
-    return x / np.where(peak > 0, peak, 1.0)
-
-
-def split_values(x: np.ndarray, split: Split) -> np.ndarray:
-    """Spread values over a trailing ``part`` axis (see the module docstring).
-
-    Examples
-    --------
-    >>> split_values(np.array([2.0 - 3.0j]), "re_im_signed").tolist()
-    [[2.0, 0.0, 0.0, 3.0]]
-    """
-    x = np.asarray(x)
-    if split == "none":
-        return x
-    re, im = np.real(x).astype(np.float64), np.imag(x).astype(np.float64)
-    if split == "re_im":
-        parts = (re, im)
-    elif split == "signed":
-        parts = (np.maximum(re, 0.0), np.maximum(-re, 0.0))
-    else:
-        parts = (np.maximum(re, 0), np.maximum(-re, 0), np.maximum(im, 0), np.maximum(-im, 0))
-    return np.stack(parts, axis=-1)
-
-
-def combine_parts(y: np.ndarray, combine: Split) -> np.ndarray:
-    """Fold a trailing ``part`` axis back into values (inverse of :func:`split_values`).
-
-    Examples
-    --------
-    >>> combine_parts(split_values(np.array([2.0 - 3.0j]), "re_im_signed"), "re_im_signed")
-    array([2.-3.j])
-    """
-    if combine == "none":
-        return y
-    if combine == "re_im":
-        return y[..., 0] + 1j * y[..., 1]
-    if combine == "signed":
-        return y[..., 0] - y[..., 1]
-    return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
-
-
-def dither_offsets(n: int) -> np.ndarray:
-    r"""The fixed dither offsets ``u_0 … u_{n−1} ∈ [0, 1)`` of ``rounding="dither"``.
-
-    ``u_i`` is the top 53 bits of SplitMix64's output for ``i`` (a bijective integer
-    hash: the same numbers in any language and numpy version, no random state), so
-    the offsets are uniform and uncorrelated between positions.  Re-quantising a
-    signal that is already on a grid (ADC codes) with a step that is not a divisor
-    of its LSB rounds the part that repeats over chirps the same way in every
-    chirp; the chirp sum (the Doppler DFT's zero bin) then adds those errors
-    coherently into false zero-Doppler peaks.  With the offsets the error of each
-    sample is uniform on ``(−s, s)`` and independent of the value (non-subtractive
-    dither: error power ``s²/6`` instead of ``s²/12``, but white).
-
-    Examples
-    --------
-    >>> u = dither_offsets(100_000)
-    >>> bool(u.min() >= 0 and u.max() < 1), round(float(u.mean()), 2)
-    (True, 0.5)
-    >>> dither_offsets(3).round(4).tolist()
-    [0.8833, 0.4315, 0.0264]
-    """
-    with np.errstate(over="ignore"):
-        z = (np.arange(n, dtype=np.uint64) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15)
-        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        z = z ^ (z >> np.uint64(31))
-    return (z >> np.uint64(11)).astype(np.float64) * 2.0 ** -53

@@ -34,7 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from compiler.snn.coding import N_PARTS, Decoder, Encoder
 from compiler.snn.neurons import NeuronParams
-from compiler.snn.projections import MatrixProjection, Projection, StencilProjection
+from compiler.snn.projections import Projection
 from compiler.snn.resonator import N_COMPARTMENTS, ResonatorParams
 from ir.errors import NetworkError
 
@@ -167,15 +167,8 @@ class SpikingNetwork:
     def n_synapse_instances(self) -> int:
         """Synapses counting every repetition and stencil position (what a chip would wire)."""
         pops = self.population
-        total = 0
-        for p in self.projections:
-            src = pops[p.source]
-            if isinstance(p, MatrixProjection):
-                reps = src.size // prod(src.shape[a] for a in p.contract)
-                total += reps * p.n_synapses
-            else:
-                total += pops[p.target].size * p.n_taps
-        return total
+        return sum(p.n_synapse_instances(pops[p.source], pops[p.target])
+                   for p in self.projections)
 
     # ------------------------------------------------------------------ checks
     def validate(self) -> SpikingNetwork:
@@ -200,7 +193,7 @@ class SpikingNetwork:
             if pops[proj.target].source:
                 raise NetworkError(f"projection {proj.id!r}: target {proj.target!r} is a spike "
                                    "source and cannot receive input", node=proj.id)
-            _check_axes(proj, pops[proj.source], pops[proj.target])
+            proj.check_axes(pops[proj.source], pops[proj.target])
         _check_ports(self.encoders, pops, "encoder", want_source=True)
         _check_ports(self.decoders, pops, "decoder", want_source=None)
         for port in (*self.encoders, *self.decoders):
@@ -247,7 +240,7 @@ class SpikingNetwork:
         g = nx.DiGraph()
         g.add_nodes_from(p.id for p in self.populations)
         for proj in self.projections:
-            if _min_delay(proj) == 0:
+            if proj.min_delay() == 0:
                 g.add_edge(proj.source, proj.target)
         try:
             return list(nx.lexicographical_topological_sort(g))
@@ -271,49 +264,6 @@ def _unique(items: Iterable, what: str) -> dict:
             raise NetworkError(f"duplicate {what} id {item.id!r}", node=item.id)
         out[item.id] = item
     return out
-
-
-def _min_delay(proj: Projection) -> int | None:
-    """The smallest delay of a live (non-zero) synapse; ``None`` when no synapse is live."""
-    weights = proj.kernel if isinstance(proj, StencilProjection) else (
-        proj.weights if proj.weights is not None else proj.values)
-    live = weights != 0
-    if not live.any():
-        return None
-    return 0 if proj.delays is None else int(proj.delays[live].min())
-
-
-def _check_axes(proj: Projection, src: Population, tgt: Population) -> None:
-    pid = proj.id
-    if isinstance(proj, StencilProjection):
-        if src.shape != tgt.shape:  # same axes and sizes; matched by name, in any order
-            raise NetworkError(f"projection {pid!r}: a stencil needs the same axes and sizes "
-                               f"on source and target, got {src.shape} and {tgt.shape}",
-                               node=pid)
-        for axis, width in zip(proj.axes, proj.kernel.shape, strict=True):
-            if axis not in src.shape:
-                raise NetworkError(f"projection {pid!r}: axis {axis!r} is not in population "
-                                   f"{src.id!r} (axes {src.axes})", node=pid)
-            if width > src.shape[axis] and proj.edge[proj.axes.index(axis)] == "wrap":
-                raise NetworkError(f"projection {pid!r}: kernel width {width} exceeds axis "
-                                   f"{axis!r} of size {src.shape[axis]} with wrap edges",
-                                   node=pid)
-        return
-    for axes, pop, role in ((proj.contract, src, "contract"), (proj.produce, tgt, "produce")):
-        missing = [a for a in axes if a not in pop.shape]
-        if missing or len(set(axes)) != len(axes):
-            raise NetworkError(f"projection {pid!r}: {role} axes {axes} must be distinct axes of "
-                               f"population {pop.id!r} (axes {pop.axes})", node=pid)
-    n_in = prod(src.shape[a] for a in proj.contract)
-    n_out = prod(tgt.shape[a] for a in proj.produce)
-    if (n_in, n_out) != proj.n_in_out:
-        raise NetworkError(f"projection {pid!r}: matrix is {proj.n_in_out} but the axes give "
-                           f"({n_in}, {n_out})", node=pid)
-    src_rep = {a: n for a, n in src.shape.items() if a not in proj.contract}
-    tgt_rep = {a: n for a, n in tgt.shape.items() if a not in proj.produce}
-    if src_rep != tgt_rep:
-        raise NetworkError(f"projection {pid!r}: repetition axes differ: source {src.id!r} has "
-                           f"{src_rep}, target {tgt.id!r} has {tgt_rep}", node=pid)
 
 
 def _check_ports(items: list, pops: dict, what: str, want_source: bool | None) -> None:

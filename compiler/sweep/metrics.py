@@ -11,7 +11,7 @@ Built-in metrics
 ----------------
 ``cfar``
     Spiking decisions ``s`` vs the conventional CFAR ``c`` (``ir.evaluate``) on the
-    same frame (seed 000, Eq. 13-14), pooled over all cells of all frames:
+    same frame (paper 000, Eq. 13-14), pooled over all cells of all frames:
 
     .. math:: \text{sensitivity} = \frac{TP}{TP+FN},\quad
               \text{precision} = \frac{TP}{TP+FP}

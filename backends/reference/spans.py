@@ -1,6 +1,6 @@
-r"""The closed form's segment solvers: one phase segment of one population, no step loop.
+r"""The closed form's span solvers: one phase span of one population, no step loop.
 
-With arrival steps ``a_j = t_j + d_j`` of the synapses ``w_j`` and a segment
+With arrival steps ``a_j = t_j + d_j`` of the synapses ``w_j`` and a span
 ``[s_0, s_1)`` of ``L`` steps and bias ``b``:
 
 *Silent* (input on, spiking off, ``d_v = 0``, ``d_u ∈ {0, 1}``) — no time loop:
@@ -11,20 +11,20 @@ With arrival steps ``a_j = t_j + d_j`` of the synapses ``w_j`` and a segment
     v_1 = v_0 + L\,(u_0 + b) + \textstyle\sum_j w_j\,(s_1 - a_j)\\
     d_u = 1:\quad u_1 &= I[s_1 - 1], \qquad v_1 = v_0 + L\,b + \textstyle\sum_j w_j
 
-(sums over arrivals in the segment): event-driven (or dense) matrix products
+(sums over arrivals in the span): event-driven (or dense) matrix products
 per projection and delay.
 
 *Charging* (input off, ``d_v = 0``): ``u = 0`` and ``v_0 + k\,b`` first reaches
 ``v_th`` at ``k = \lceil (v_{th} - v_0)/b \rceil`` (checked at ``k-1`` and ``k``).
 
 *Driven* (anything else): the drive histogram ``D[t] = Σ_j w_j [a_j = t]`` of
-the segment is one delivery over a ``(steps × frames)`` batch — the very
+the span is one delivery over a ``(steps × frames)`` batch — the very
 arithmetic of the step engine — and the recurrences run with the step engine's
 operation order: ``np.cumsum`` (sequential) for ``d_u ∈ {0, 1}, d_v = 0``, else
-:func:`~backends.reference.neuron.neuron_step` over the segment.  The caller
-cuts long segments into blocks so the histogram stays bounded.
+:func:`~backends.reference.neuron.neuron_step` over the span.  The caller
+cuts long spans into blocks so the histogram stays bounded.
 
-Each solver takes the state at the segment start (``u``, ``v`` flat over
+Each solver takes the state at the span start (``u``, ``v`` flat over
 ``(frames, neurons)``; ``first`` the first spike steps, ``-1`` none, updated in
 place) and returns ``(u, v)`` at its end.
 """
@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from backends.reference.delivery import Delivery
-from backends.reference.neuron import NeuronState, Segment, StepParams, neuron_step
+from backends.reference.neuron import NeuronState, PhaseSpan, StepParams, neuron_step
 
 __all__ = ["Arrivals", "charge", "silent", "drive", "driven"]
 
@@ -57,11 +57,11 @@ class Arrivals:
 
 
 def charge(
-    v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams
+    v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams
 ) -> tuple[np.ndarray, np.ndarray]:
     """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic.
 
-    Only neurons that have not fired and end the segment at or above threshold
+    Only neurons that have not fired and end the span at or above threshold
     can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
     step arithmetic runs on those candidates alone.
     """
@@ -100,13 +100,13 @@ def charge(
 
 
 def silent(
-    u: np.ndarray, v: np.ndarray, seg: Segment, params: StepParams, arrivals: list,
+    u: np.ndarray, v: np.ndarray, seg: PhaseSpan, params: StepParams, arrivals: list,
     n_frames: int, dims: tuple[int, ...], need_u: bool = True
 ) -> tuple[np.ndarray, np.ndarray]:
     """Input on, spiking off, ``dv = 0``, ``du ∈ {0, 1}``: end state from arrival features.
 
     With ``du = 0`` and ``need_u`` False the end current (``u + Σ w``) is not
-    computed: no later segment reads it (the caller checked), saving one product.
+    computed: no later span reads it (the caller checked), saving one product.
     """
     s0, s1 = seg.start, seg.stop
     b = params.per_neuron(seg.bias, u.size) if seg.bias != 0 else seg.bias
@@ -127,7 +127,7 @@ def silent(
             if last.any():
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
     total, second = total.reshape(u.shape), second.reshape(u.shape)
-    if params.du == 0.0 and s0 == 0:  # the first segment: u = v = 0, skip the zero terms
+    if params.du == 0.0 and s0 == 0:  # the first span: u = v = 0, skip the zero terms
         return total, second if seg.bias == 0 else second + s1 * b
     if params.du == 0.0:
         return u + total, v + (s1 - s0) * (u + b) + second
@@ -135,10 +135,10 @@ def silent(
 
 
 def driven(
-    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams,
+    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams,
     arrivals: list, n_frames: int, dims: tuple[int, ...]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Any segment: drive histogram by delivery, then the step engine's recurrences."""
+    """Any span: drive histogram by delivery, then the step engine's recurrences."""
     s0, n_t = seg.start, seg.stop - seg.start
     if not seg.input_on:
         return _recur(u, v, first, seg, params, None)
@@ -182,10 +182,10 @@ def drive(arrivals: list, s0: int, s1: int, n_frames: int, dims: tuple[int, ...]
 
 
 def _recur(
-    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: Segment, params: StepParams,
+    u: np.ndarray, v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams,
     drive: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The step engine's own update over the segment (general decays)."""
+    """The step engine's own update over the span (general decays)."""
     state = NeuronState(u, v, first >= 0)
     for i, t in enumerate(range(seg.start, seg.stop)):
         fired, state = neuron_step(state, 0 if drive is None else drive[i], params, t)

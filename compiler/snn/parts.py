@@ -1,0 +1,84 @@
+"""Signed and complex values on a trailing ``part`` axis, and per-input normalisation.
+
+Part layouts (:data:`PartLayout`, an encoder's ``split`` and a decoder's
+``combine``) put signed or complex values on a trailing ``part`` axis:
+``re_im`` → (Re, Im); ``signed`` → (relu(x), relu(−x)); ``re_im_signed`` →
+(relu Re, relu −Re, relu Im, relu −Im); ``none`` adds no axis.
+:func:`split_values` spreads values over the parts, :func:`combine_parts`
+folds them back.
+
+Per-input normalisation (``Encoder.normalize_axes``): before the parts are
+formed, each slice over those axes is divided by its largest
+``max(|Re x|, |Im x|)`` (:func:`normalize_values`; an all-zero slice stays
+zero), so every chirp or frame uses the code's whole range; decoded outputs
+are then in those normalised units.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+__all__ = ["N_PARTS", "PartLayout", "combine_parts", "normalize_values", "split_values"]
+
+#: How signed/complex values are laid out on the trailing ``part`` axis.
+PartLayout = Literal["none", "re_im", "signed", "re_im_signed"]
+
+#: Size of the trailing ``part`` axis each layout adds (``none`` adds no axis).
+N_PARTS: dict[str, int] = {"none": 0, "re_im": 2, "signed": 2, "re_im_signed": 4}
+
+
+def normalize_values(x: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+    """Divide each slice over ``axes`` by its largest ``max(|Re|, |Im|)`` (zero slices stay 0).
+
+    Examples
+    --------
+    >>> normalize_values(np.array([[2.0, -4.0], [0.0, 0.0]]), axes=(1,)).tolist()
+    [[0.5, -1.0], [0.0, 0.0]]
+    >>> normalize_values(np.array([3.0 - 6.0j]), axes=(0,)).tolist()
+    [(0.5-1j)]
+    """
+    x = np.asarray(x)
+    if not axes:
+        return x
+    peak = np.maximum(np.abs(np.real(x)), np.abs(np.imag(x))).max(axis=axes, keepdims=True)
+    return x / np.where(peak > 0, peak, 1.0)
+
+
+def split_values(x: np.ndarray, split: PartLayout) -> np.ndarray:
+    """Spread values over a trailing ``part`` axis (see the module docstring).
+
+    Examples
+    --------
+    >>> split_values(np.array([2.0 - 3.0j]), "re_im_signed").tolist()
+    [[2.0, 0.0, 0.0, 3.0]]
+    """
+    x = np.asarray(x)
+    if split == "none":
+        return x
+    re, im = np.real(x).astype(np.float64), np.imag(x).astype(np.float64)
+    if split == "re_im":
+        parts = (re, im)
+    elif split == "signed":
+        parts = (np.maximum(re, 0.0), np.maximum(-re, 0.0))
+    else:
+        parts = (np.maximum(re, 0), np.maximum(-re, 0), np.maximum(im, 0), np.maximum(-im, 0))
+    return np.stack(parts, axis=-1)
+
+
+def combine_parts(y: np.ndarray, combine: PartLayout) -> np.ndarray:
+    """Fold a trailing ``part`` axis back into values (inverse of :func:`split_values`).
+
+    Examples
+    --------
+    >>> combine_parts(split_values(np.array([2.0 - 3.0j]), "re_im_signed"), "re_im_signed")
+    array([2.-3.j])
+    """
+    if combine == "none":
+        return y
+    if combine == "re_im":
+        return y[..., 0] + 1j * y[..., 1]
+    if combine == "signed":
+        return y[..., 0] - y[..., 1]
+    return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
