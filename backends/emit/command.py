@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from backends.emit import EMITTERS
-from compiler.cli.chain import load_arrays
+from compiler.cli.chain import compile_chain
 from ir.errors import CompileError
 
 __all__ = ["add_parsers", "run_emit"]
@@ -58,17 +58,8 @@ def run_emit(source: str | Path, out_dir: str | Path, *, target: str = "loihi2",
     path = Path(source)
     if path.is_dir():
         return EMITTERS[backend](path, out_dir, name=name)
-    from compiler.calibration import synthetic_inputs
-    from compiler.compile import compile_graph
-    from compiler.compile_guards import check_compile
-    from ir import Graph
-
-    graph = Graph.from_yaml(path)
-    check_compile(graph)  # before the calibration arrays are read or drawn
-    inputs = (load_arrays(calibration, graph.input_ids(), f"chain {str(path)!r}") if calibration
-              else synthetic_inputs(graph, seed=0))
-    program = compile_graph(graph, target=target, calibration_inputs=inputs,
-                            time_steps=time_steps)
+    program, _note, _inputs = compile_chain(path, target, calibration=calibration,
+                                            time_steps=time_steps)  # as compile and report do
     return EMITTERS[backend](program, out_dir, name=name)
 
 

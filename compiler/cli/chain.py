@@ -23,7 +23,7 @@ from compiler.cli.arrays import (
 from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
-__all__ = ["MAX_NPY_BYTES", "add_parsers", "load_arrays", "parse_options", "read_npy",
+__all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "load_arrays", "parse_options", "read_npy",
            "write_output"]
 
 
@@ -132,8 +132,23 @@ def parse_options(items: list[str] | None) -> dict:
     return options
 
 
-def _compile(args: argparse.Namespace, target: str | None):
-    """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
+def compile_chain(chain: str | Path, target: str | None, *,
+                  calibration: list[str] | None = None, bin_layout: str | None = None,
+                  motifs: dict[str, str] | None = None, time_steps: int | None = None,
+                  weight_bits: int | None = None, options: dict | None = None,
+                  quiet: bool = True):
+    """Compile a chain file as every command that compiles one does (compile, report, emit, nir).
+
+    Reads the chain, checks its estimated cost before the calibration arrays are read or
+    drawn (they are part of the estimate), reads ``calibration`` (``[NODE=]FILE`` items) or
+    draws seeded synthetic noise, and compiles with a progress bar unless ``quiet``.
+
+    Returns
+    -------
+    (CompiledProgram, str, dict)
+        The program, its calibration note (:mod:`compiler.cli.notes`) and the
+        calibration inputs it was compiled on.
+    """
     from compiler.calibration import synthetic_inputs
     from compiler.cli.notes import GIVEN_NOTE, SYNTHETIC_NOTE
     from compiler.compile import compile_graph, default_pipeline
@@ -141,18 +156,32 @@ def _compile(args: argparse.Namespace, target: str | None):
     from compiler.progress import make_progress
     from ir import Graph
 
-    graph = Graph.from_yaml(args.chain)
-    options = parse_options(getattr(args, "option", None))
+    graph = Graph.from_yaml(chain)
+    options = dict(options or {})
     max_memory_bytes, max_time_s = limits_from_options(options)
     # before the calibration arrays are read or drawn: they are part of the estimate
     check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
-    if args.calibration:
-        calibration = load_arrays(args.calibration, graph.input_ids(), f"chain {args.chain}",
-                                  bin_layout=getattr(args, "bin_layout", None))
+    if calibration:
+        inputs = load_arrays(calibration, graph.input_ids(), f"chain {chain}",
+                             bin_layout=bin_layout)
         note = GIVEN_NOTE
     else:  # the counts that depend on it: compiler.cli.notes
-        calibration = synthetic_inputs(graph, seed=0)
+        inputs = synthetic_inputs(graph, seed=0)
         note = SYNTHETIC_NOTE
+    n_passes = len(default_pipeline(options, hardware=target is not None))
+    progress = make_progress(quiet, total=n_passes, desc="compile")
+    try:
+        program = compile_graph(graph, target=target, motifs=motifs or {},
+                                calibration_inputs=inputs, time_steps=time_steps,
+                                weight_bits=weight_bits, progress=progress, options=options)
+    finally:
+        getattr(progress, "close", lambda: None)()
+    return program, note, inputs
+
+
+def _compile(args: argparse.Namespace, target: str | None):
+    """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
+    options = parse_options(getattr(args, "option", None))
     motifs = {}
     for m in args.motif or []:
         key, sep, value = m.partition("=")
@@ -161,16 +190,12 @@ def _compile(args: argparse.Namespace, target: str | None):
         motifs[key] = value
     if getattr(args, "repetitions", None):
         options["repetitions"] = args.repetitions
-    n_passes = len(default_pipeline(options, hardware=target is not None))
-    progress = make_progress(args.quiet or args.json, total=n_passes, desc="compile")
-    try:
-        program = compile_graph(graph, target=target, motifs=motifs,
-                                calibration_inputs=calibration, time_steps=args.time_steps,
-                                weight_bits=getattr(args, "weight_bits", None),
-                                progress=progress, options=options)
-    finally:
-        getattr(progress, "close", lambda: None)()
-    _warn_accuracy(program, calibration, note)
+    program, note, inputs = compile_chain(args.chain, target, calibration=args.calibration,
+                                          bin_layout=getattr(args, "bin_layout", None),
+                                          motifs=motifs, time_steps=args.time_steps,
+                                          weight_bits=getattr(args, "weight_bits", None),
+                                          options=options, quiet=args.quiet or args.json)
+    _warn_accuracy(program, inputs, note)
     return program, note
 
 
