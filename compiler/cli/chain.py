@@ -23,8 +23,8 @@ from compiler.cli.arrays import (
 from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
-__all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "load_arrays", "parse_options", "read_npy",
-           "write_output"]
+__all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "load_arrays", "parse_options",
+           "read_npy", "write_output"]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
