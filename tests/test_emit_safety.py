@@ -173,8 +173,9 @@ def _npy_declaring(shape: tuple, data: bytes = b"\0" * 64, descr: str = "<f8") -
     return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header + data
 
 
-def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
-    net = SpikingNetwork(
+def _tiny_network() -> SpikingNetwork:
+    """Two inputs into one fire-once IF neuron (x = [1, 0.5] fires it at step 2)."""
+    return SpikingNetwork(
         name="tiny", n_steps=6,
         populations=[Population(id="in", shape={"i": 2}, source=True),
                      Population(id="out", shape={"o": 1},
@@ -184,6 +185,10 @@ def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
         encoders=[Encoder(port="x", population="in",
                           code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
         decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+
+
+def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
+    net = _tiny_network()
     pkg = emit_numpy(net, tmp_path, name="snn_tiny")
     sparse = tmp_path / "sparse.npy"  # declares 4 GiB + 8 bytes, and holds them (sparse)
     head = _npy_declaring(((1 << 29) + 1,), b"")
@@ -209,16 +214,7 @@ def test_the_command_line_refuses_giant_declared_inputs_in_one_line(tmp_path):
 def test_the_package_command_line_takes_inputs_as_radarsnn_run_does(tmp_path):
     """``python -m PKG -i x=X.npy`` as ``radarsnn run -i``; positional still works; a port twice is
     a usage error (exit status 2)."""
-    net = SpikingNetwork(
-        name="tiny", n_steps=6,
-        populations=[Population(id="in", shape={"i": 2}, source=True),
-                     Population(id="out", shape={"o": 1},
-                                params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
-        projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
-                                      produce=("o",), weights=np.ones((2, 1)))],
-        encoders=[Encoder(port="x", population="in",
-                          code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
-        decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    net = _tiny_network()
     pkg = emit_numpy(net, tmp_path, name="snn_inputs")
     np.save(tmp_path / "x.npy", np.array([1.0, 0.5]))
     x = str(tmp_path / "x.npy")
