@@ -48,8 +48,8 @@ def baselines(parts: dict, epochs: int, snn_epochs: int, level_db: float) -> lis
         default_classifier,
     )
     from compiler.classifier.fit import accuracy, fit
-    from compiler.classifier.forward import classify
     from compiler.classifier.train import ann_model, cnn_model, mac_counts, snn_model, snn_weights
+    from ir.classifier_forward.forward import classify
 
     torch.set_num_threads(1)
     tr = (parts["train"].x, parts["train"].y)

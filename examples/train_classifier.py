@@ -40,7 +40,7 @@ def main() -> None:
     )
     from compiler.classifier.fit import fit
     from compiler.classifier.train import mac_counts, snn_model, snn_weights
-    from compiler.classifier.weights import save_weights
+    from ir.classifier_forward.weights import save_weights
     from radar.roi_dataset import make_dataset
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -21,6 +21,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
+from ir.classifier_forward import classify, load_weights
 from ir.errors import IRError
 from ir.ops import (
     CFAR,
@@ -142,8 +143,6 @@ def _classifier(node_id: str, op: Classifier, args: list, types: list) -> np.nda
             "(docs/classifier.md) or evaluate the graph up to its input instead",
             node=node_id,
         )
-    from compiler.classifier import classify, load_weights  # tests/test_layers.py EXCEPTIONS
-
     t = types[0]
     batch = op.batch_axes(t)
     order = [t.index(a) for a in (*batch, op.time_axis, *op.map_axes)]

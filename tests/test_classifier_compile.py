@@ -10,10 +10,10 @@ from hypothesis import strategies as st
 from backends.reference import simulate
 from compiler.classifier import build_layer_plan, classify, load_weights, save_weights
 from compiler.classifier.default import ROI_SHAPE, default_classifier
-from compiler.classifier.plan import conv_matrix
 from compiler.compile import compile_graph
 from compiler.report.classifier import classifier_row
 from ir import Graph
+from ir.classifier_forward.layers import conv_matrix
 from ir.errors import CompileError, IRError
 from ir.interpreter import evaluate
 from ir.ops.classify import (

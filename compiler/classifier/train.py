@@ -3,7 +3,7 @@ r"""Training the classifier and its baselines with PyTorch (optional extra ``tra
 Models (``(n, T, H, W)`` ROI sequences in, class scores out):
 
 * :func:`snn_model` — paper 000's SNN built from a :class:`~ir.ops.classify.Classifier`
-  op: the same update as :mod:`compiler.classifier.forward` (so the trained weights mean
+  op: the same update as :mod:`ir.classifier_forward.forward` (so the trained weights mean
   the same in numpy and in the compiled network), spikes through a surrogate gradient
   :math:`\partial s/\partial v = 1/(1 + \beta|v - v_{th}|)^2` (fast sigmoid), trained by
   backpropagation through time over the frames;
@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from compiler.classifier.plan import build_layer_plan
+from ir.classifier_forward.layers import build_layer_plan
 from ir.ops.classify import Classifier, Conv2d, Integrator, Pool, Recurrent
 
 __all__ = ["ann_model", "cnn_model", "fan_out", "mac_counts", "snn_model", "snn_weights",
@@ -70,7 +70,7 @@ def snn_model(op: Classifier, map_shape: tuple[int, int], *, surrogate_beta: flo
         ``.last_spikes`` holds the mean spikes per sample and ``.last_events`` the mean
         synaptic events per sample (a differentiable tensor): every input or layer spike
         times its :func:`fan_out`, plus a recurrent layer's spikes times its ``units`` at
-        the next step — the count of :func:`compiler.classifier.forward.run_plan`.
+        the next step — the count of :func:`ir.classifier_forward.forward.run_plan`.
     """
     torch = torch_module()
     nn, fnn = torch.nn, torch.nn.functional
@@ -196,7 +196,7 @@ def fan_out(op: Classifier, map_shape: tuple[int, int]) -> list[np.ndarray]:
 
     Entry ``k`` has the shape of layer ``k``'s output features (zeros for layers whose
     output is not a population: an ``avg`` pool, the integrator) and counts the wired
-    synapses of the next population in :func:`compiler.classifier.plan.build_layer_plan`
+    synapses of the next population in :func:`ir.classifier_forward.layers.build_layer_plan`
     (all-ones weights) that a spike of that neuron drives. A recurrent layer's spikes also
     reach its own ``units`` neurons one step later (not included here).
 

@@ -10,7 +10,7 @@ and a ``levels`` encoding with one reference level ``L``:
    frame ``f``, into IF neurons with threshold 1 and no memory (``du = dv = 1``), so input
    neuron ``(map0, map1)`` spikes at step ``f`` iff
    ``x[f, map0, map1] > L`` — frame ``f`` arrives at step ``f``;
-3. one population ``<node>/l<i>`` per layer of :func:`compiler.classifier.plan.build_layer_plan`
+3. one population ``<node>/l<i>`` per layer of :func:`ir.classifier_forward.layers.build_layer_plan`
    with axes ``(batch..., l<i>_c, l<i>_y, l<i>_x)`` (maps) or ``(batch..., l<i>_n)``, fed by a
    sparse :class:`~compiler.snn.MatrixProjection` of the plan's matrix (the convolutions
    unrolled: a stencil cannot mix channels or stride), shared over the batch axes; a
@@ -19,7 +19,7 @@ and a ``levels`` encoding with one reference level ``L``:
 4. the integrator ``<node>/out`` has axes ``(batch..., class)`` and a ``membrane`` decoder
    read after the last frame: the scores.
 
-So the step simulator computes exactly the sums of :mod:`compiler.classifier.forward`
+So the step simulator computes exactly the sums of :mod:`ir.classifier_forward.forward`
 (same matrices, same update order, zero-delay projections within a step).
 
 A ``real`` encoding (graded input currents) and more than one level have no spiking
@@ -31,12 +31,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from compiler.classifier.plan import LayerPlan, build_layer_plan
-from compiler.classifier.weights import load_weights
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
-from compiler.snn import Decoder, LatencyCode, NeuronParams
+from compiler.snn import Decoder, LatencyCode, NeuronParams, Phase
+from ir.classifier_forward.layers import LayerDynamics, LayerPlan, build_layer_plan
+from ir.classifier_forward.weights import load_weights
 from ir.errors import CompileError
 from ir.ops.classify import Classifier
 
@@ -50,6 +50,29 @@ LEVEL_AXIS = "level"
 #: The input relays: IF neurons without memory, threshold 1 (a spike in = a spike out).
 RELAY = NeuronParams(du=1.0, dv=1.0, v_th=1.0, reset="value")
 
+
+
+def neuron_params(dynamics: LayerDynamics) -> NeuronParams:
+    """The :class:`~compiler.snn.NeuronParams` of one classifier layer, field for field.
+
+    A read-out (``spiking=False``) keeps its spiking off for the whole frame; a reset or
+    reset value left unset takes the neuron model's default.
+
+    Examples
+    --------
+    >>> neuron_params(LayerDynamics(du=1.0, dv=1.0, v_th=1.0, reset="value")).reset
+    'value'
+    >>> neuron_params(LayerDynamics(du=0.0, dv=0.0, v_th=1.0, spiking=False)).phases[0].spiking_on
+    False
+    """
+    fields: dict = {"du": dynamics.du, "dv": dynamics.dv, "v_th": dynamics.v_th}
+    if dynamics.reset is not None:
+        fields["reset"] = dynamics.reset
+    if dynamics.v_reset is not None:
+        fields["v_reset"] = dynamics.v_reset
+    if not dynamics.spiking:
+        fields["phases"] = (Phase(start_step=0, spiking_on=False),)
+    return NeuronParams(**fields)
 
 def _check(node: str, op: Classifier) -> float:
     if not op.layers:
@@ -109,7 +132,8 @@ def lower_classifier(ctx: LoweringContext, node: str, op: Classifier,
     for k, plan in enumerate(plans):
         last = k == len(plans) - 1
         axes = _axes(plan, batch, last)
-        pop = b.population(node, "out" if last else f"l{plan.index}", axes, plan.params,
+        pop = b.population(node, "out" if last else f"l{plan.index}", axes,
+                           neuron_params(plan.params),
                            motif=MOTIF)
         produce = tuple(a for a in axes if a not in batch)
         b.matrix(node, f"w{plan.index}", prev.id, pop.id, contract=contract, produce=produce,

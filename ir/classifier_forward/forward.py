@@ -2,7 +2,7 @@ r"""The numpy forward pass of the classifier: the reference semantics of the ``c
 
 One step per frame ``t``. The encoding turns frame ``t`` into the first layer's input
 (``levels``: binary channels ``[x > level_k]``; ``real``: ``scale · x``); every
-population of :func:`compiler.classifier.plan.build_layer_plan` then updates in order, in the
+population of :func:`ir.classifier_forward.layers.build_layer_plan` then updates in order, in the
 same step (the spiking network's zero-delay projections):
 
 .. math::
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.classifier.plan import LayerPlan, build_layer_plan
+from ir.classifier_forward.layers import LayerPlan, build_layer_plan
 from ir.ops.classify import Classifier
 
 __all__ = ["ForwardResult", "classify", "encode_frames", "run_plan"]
@@ -130,10 +130,10 @@ def run_plan(plans: list[LayerPlan], inputs: np.ndarray, *, binary_input: bool) 
                 x = v[k]
                 continue
             fired = v[k] >= par.v_th
-            if par.reset == "subtract":
+            if par.reset_mode == "subtract":
                 v[k] = v[k] - par.v_th * fired
             else:
-                v[k] = np.where(fired, par.v_reset, v[k])
+                v[k] = np.where(fired, par.reset_value, v[k])
             s[k] = fired.astype(np.float64)
             spikes[:, k] += fired.sum(axis=1)
             x = s[k]

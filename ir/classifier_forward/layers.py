@@ -1,4 +1,4 @@
-r"""The classifier's layer stack as sparse matrices and neuron parameters.
+r"""The classifier's layer stack as sparse matrices and per-layer dynamics.
 
 Every layer with weights becomes one matrix ``M`` of shape ``(n_in, n_out)`` over the
 flattened (channel-major, ``C x H x W``) features, so a layer's input current is
@@ -12,9 +12,10 @@ flattened (channel-major, ``C x H x W``) features, so a layer's input current is
 * ``pool`` ``max``: on binary spikes the maximum is an OR — one neuron per output with
   weight 1 from its window, threshold 1, no memory (``du = dv = 1``).
 
-The float forward pass (:mod:`compiler.classifier.forward`) and the lowering
-(:mod:`compiler.lowering.classifier`) both use these matrices and
-:class:`compiler.snn.NeuronParams`, so they compute the same sums.
+The float forward pass (:mod:`ir.classifier_forward.forward`) and the lowering
+(:mod:`compiler.lowering.classifier`) both use these matrices and the same
+:class:`LayerDynamics` (the lowering turns them into :class:`compiler.snn.NeuronParams`,
+field for field), so they compute the same sums.
 
 Examples
 --------
@@ -36,10 +37,45 @@ from typing import Literal
 import numpy as np
 import scipy.sparse as sp
 
-from compiler.snn import NeuronParams, Phase
 from ir.ops.classify import LIF, Classifier, Conv2d, Integrator, Pool
 
-__all__ = ["LayerPlan", "build_layer_plan", "conv_matrix", "pool_matrix", "neuron_params"]
+__all__ = ["LayerDynamics", "LayerPlan", "build_layer_plan", "conv_matrix", "layer_dynamics",
+           "pool_matrix"]
+
+
+@dataclass(frozen=True)
+class LayerDynamics:
+    r"""One layer's neuron update: :math:`u \leftarrow (1-d_u)u + I`, :math:`v \leftarrow
+    (1-d_v)v + u`, a spike and reset when :math:`v \ge v_{th}` (never for a read-out).
+
+    Attributes
+    ----------
+    du, dv, v_th : float
+        Current and membrane decays, threshold.
+    reset : {"subtract", "value"} or None
+        The reset; None: the neuron model's default (``subtract``).
+    v_reset : float or None
+        The membrane after a ``value`` reset; None: the default (0).
+    spiking : bool
+        False for the integrator read-out (it never spikes).
+    """
+
+    du: float
+    dv: float
+    v_th: float
+    reset: Literal["subtract", "value"] | None = None
+    v_reset: float | None = None
+    spiking: bool = True
+
+    @property
+    def reset_mode(self) -> str:
+        """The reset, with the default filled in."""
+        return self.reset or "subtract"
+
+    @property
+    def reset_value(self) -> float:
+        """The ``value`` reset's membrane, with the default filled in."""
+        return 0.0 if self.v_reset is None else self.v_reset
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +92,7 @@ class LayerPlan:
         Input weights over the flattened previous features.
     recurrent : scipy.sparse.csr_matrix or None
         ``(n_out, n_out)`` weights of the previous step's own spikes.
-    params : NeuronParams
+    params : LayerDynamics
         The population's dynamics.
     shape : tuple of int
         Output feature shape ``(C, H, W)`` or ``(n,)``.
@@ -66,7 +102,7 @@ class LayerPlan:
     kind: Literal["spiking", "or", "integrator"]
     matrix: sp.csr_matrix
     recurrent: sp.csr_matrix | None
-    params: NeuronParams
+    params: LayerDynamics
     shape: tuple[int, ...]
 
     @property
@@ -75,23 +111,22 @@ class LayerPlan:
         return int(np.prod(self.shape))
 
 
-def neuron_params(neuron: LIF | Integrator | None) -> NeuronParams:
-    """The :class:`NeuronParams` of a layer (``None``: the OR neuron of a max pool).
+def layer_dynamics(neuron: LIF | Integrator | None) -> LayerDynamics:
+    """The :class:`LayerDynamics` of a layer (``None``: the OR neuron of a max pool).
 
     Examples
     --------
-    >>> neuron_params(LIF(dv=0.25, reset="value")).reset
+    >>> layer_dynamics(LIF(dv=0.25, reset="value")).reset
     'value'
-    >>> neuron_params(Integrator(units=3)).phases[0].spiking_on
+    >>> layer_dynamics(Integrator(units=3)).spiking
     False
     """
     if neuron is None:
-        return NeuronParams(du=1.0, dv=1.0, v_th=1.0, reset="value")
+        return LayerDynamics(du=1.0, dv=1.0, v_th=1.0, reset="value")
     if isinstance(neuron, Integrator):
-        return NeuronParams(du=neuron.du, dv=neuron.dv, v_th=1.0,
-                            phases=(Phase(start_step=0, spiking_on=False),))
-    return NeuronParams(du=neuron.du, dv=neuron.dv, v_th=neuron.v_th, reset=neuron.reset,
-                        v_reset=neuron.v_reset)
+        return LayerDynamics(du=neuron.du, dv=neuron.dv, v_th=1.0, spiking=False)
+    return LayerDynamics(du=neuron.du, dv=neuron.dv, v_th=neuron.v_th, reset=neuron.reset,
+                         v_reset=neuron.v_reset)
 
 
 def conv_matrix(kernel: np.ndarray, in_shape: tuple[int, int, int], stride: tuple[int, int],
@@ -186,18 +221,18 @@ def build_layer_plan(op: Classifier, weights: Mapping[str, np.ndarray], map_shap
                                        "(after a spiking layer or a levels encoding), not after "
                                        "an avg pool or a real encoding; use mode 'avg'")
             m, _ = pool_matrix(in_shape, layer.size, 1.0)
-            kind, rec, params = "or", None, neuron_params(None)
+            kind, rec, params = "or", None, layer_dynamics(None)
         elif isinstance(layer, Conv2d):
             m, _ = conv_matrix(arrays[f"layers.{i}.weight"], in_shape, layer.stride,
                                layer.padding)
-            kind, rec, params = "spiking", None, neuron_params(layer.neuron)
+            kind, rec, params = "spiking", None, layer_dynamics(layer.neuron)
         else:
             m = sp.csr_matrix(arrays[f"layers.{i}.weight"].T)
             rec = sp.csr_matrix(arrays[f"layers.{i}.recurrent"].T) \
                 if layer.kind == "recurrent" else None
             is_out = isinstance(layer, Integrator)
             kind = "integrator" if is_out else "spiking"
-            params = neuron_params(layer if is_out else layer.neuron)
+            params = layer_dynamics(layer if is_out else layer.neuron)
         if pending is not None:
             m, pending = sp.csr_matrix(pending @ m), None
         m.eliminate_zeros()
