@@ -43,6 +43,7 @@ from backends.artifact_io import ARTIFACT_ENTRIES, plain_json, render_json
 from backends.atomic import replace_directory, write_file
 from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, seal
 from backends.reference.program import check_program
+from compiler.compile import calibrate_pass
 from compiler.hardware import HardwareProfile
 from compiler.program import CompiledProgram, Segment
 from compiler.report import Report
@@ -260,9 +261,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
         records = {} if report is None else {"report": Report(_json_field(manifest, "report",
                                                                            path))}
         options = dict(manifest["options"])
-        policy = options.get("calibration") or "static"
-        if policy not in ("static", "per-input"):
-            raise ArtifactError(f"{path}: unknown calibration policy {short_repr(policy)}")
+        policy = calibrate_pass(options).policy  # the stored options, typed as compiled
         program = CompiledProgram(graph=graph, segments=segments, options=options,
                                   records=records, target=profile, calibration_policy=policy)
         check_program(program)

@@ -28,11 +28,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel, ValidationError
 
 from compiler.compile_guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
-from compiler.lowering.options import MOTIF_OPTION_MODELS, motif_settings
+from compiler.lowering.options import MOTIF_OPTION_MODELS
 from compiler.option_checks import check_options
 from compiler.passes import CompileContext, Pass, Verify, run_pipeline
 from compiler.passes.base import Progress
@@ -48,8 +49,9 @@ from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError
 from ir.interpreter import EvalRegistry, eval_registry
+from ir.model import short_repr
 
-__all__ = ["calibrate_pass", "compile_graph", "default_pipeline", "lower_pass"]
+__all__ = ["calibrate_pass", "compile_graph", "default_pipeline", "lower_pass", "motif_settings"]
 
 
 #: Options ``compile_graph`` accepts in ``options=`` besides its named arguments.
@@ -69,6 +71,41 @@ EXTRA_OPTIONS = {
        for m in (StaticSplitOptions, *MOTIF_OPTION_MODELS) for n, f in m.model_fields.items()
        if n not in ("time_steps", "weight_bits", "calibration", "headroom")},
 }
+
+
+def motif_settings(options: Mapping[str, Any]) -> dict[type[BaseModel], BaseModel]:
+    """Every model of :data:`~compiler.lowering.options.MOTIF_OPTION_MODELS` filled from
+    ``options`` (None: the default).
+
+    Examples
+    --------
+    >>> from compiler.lowering.options import CfarOptions, RateOptions
+    >>> settings = motif_settings({"time_steps": 64, "cfar_ties": "exact"})
+    >>> settings[CfarOptions].time_steps, settings[CfarOptions].cfar_ties
+    (64, 'exact')
+    >>> motif_settings({})[RateOptions].time_steps, motif_settings({})[CfarOptions].time_steps
+    (2000, 100)
+    >>> motif_settings({"charging": "often"})
+    Traceback (most recent call last):
+    ...
+    ir.errors.CompileError: compile option charging='often' must be auto, constant or companding
+
+    Raises
+    ------
+    CompileError
+        A value its field refuses, naming the option, the value and the rule.
+    """
+    out: dict[type[BaseModel], BaseModel] = {}
+    for model in MOTIF_OPTION_MODELS:
+        given = {k: options[k] for k in model.model_fields if options.get(k) is not None}
+        try:
+            out[model] = model.model_validate(given)
+        except ValidationError as err:
+            name = str(err.errors()[0]["loc"][0])
+            what = model.model_fields[name].description or name
+            raise CompileError(f"compile option {name}={short_repr(given[name])} must be "
+                               f"{what}") from None
+    return out
 
 
 def calibrate_pass(options: Mapping[str, Any]) -> Calibrate:
@@ -93,7 +130,7 @@ def lower_pass(options: Mapping[str, Any]) -> Lower:
     Raises
     ------
     CompileError
-        A motif option its field refuses (:func:`compiler.lowering.options.motif_settings`).
+        A motif option its field refuses (:func:`motif_settings`).
 
     Examples
     --------

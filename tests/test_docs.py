@@ -11,16 +11,14 @@ repository.
 
 from __future__ import annotations
 
-import re
 import warnings
 from pathlib import Path
 
 import pytest
+from doc_blocks import fenced_blocks  # one fence scanner for the docs tests
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-NO_TEST = re.compile(r"^<!--\s*no-test\b.*-->$")
-FENCE = re.compile(r"^```(\w*)\s*$")
 
 
 def python_blocks(text: str) -> list[tuple[int, str, bool]]:
@@ -32,21 +30,8 @@ def python_blocks(text: str) -> list[tuple[int, str, bool]]:
     >>> python_blocks(md)
     [(4, 'a = 1\\n', True), (7, 'b = 2\\n', False)]
     """
-    lines = text.splitlines()
-    blocks, i = [], 0
-    while i < len(lines):
-        match = FENCE.match(lines[i].strip())
-        if match is None:
-            i += 1
-            continue
-        j = i + 1
-        while j < len(lines) and lines[j].strip() != "```":
-            j += 1
-        if match.group(1) == "python":
-            skipped = i > 0 and NO_TEST.match(lines[i - 1].strip()) is not None
-            blocks.append((i + 2, "\n".join(lines[i + 1:j]) + "\n", skipped))
-        i = j + 1
-    return blocks
+    return [(b.line + 1, b.code, b.no_test is not None)
+            for b in fenced_blocks(text) if b.lang == "python"]
 
 
 def test_python_blocks_parser_finds_fences_and_markers() -> None:

@@ -31,13 +31,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from doc_blocks import SHELLS, Block, fenced_blocks  # the fence scanner test_docs.py shares
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-SHELLS = ("bash", "sh", "shell", "console")
-FENCE = re.compile(r"^```(\S*)\s*$")
-MARKER = re.compile(r"^<!--\s*(no-test|requires)\b:?\s*(.*?)\s*-->$")
-COMMAND = re.compile(r"(?:^|[\s/;&|(])radarsnn(?:\s|$)", re.M)
 BIN = Path(sys.executable).parent  # the virtual environment's bin (radarsnn, python)
 TIMEOUT_S = 600
 
@@ -48,69 +45,6 @@ cd "$1"
 {code}
 pwd > "$2"
 """
-
-
-@dataclass(frozen=True)
-class Block:
-    """One fenced block of a page: where, its language, its code and its marker."""
-
-    page: str
-    line: int  # of the opening fence
-    lang: str
-    code: str
-    no_test: str | None = None  # the reason, when marked no-test
-    requires: tuple[str, ...] = ()
-
-    @property
-    def where(self) -> str:
-        return f"{self.page}:{self.line}"
-
-    @property
-    def is_session(self) -> bool:
-        return self.lang in SHELLS and COMMAND.search(self.script()) is not None
-
-    def script(self) -> str:
-        """The commands: the code, or of a console block its ``$ `` lines (and continuations)."""
-        if self.lang != "console":
-            return self.code
-        out, more = [], False
-        for line in self.code.splitlines():
-            if more or line.startswith("$ "):
-                out.append(line[2:] if not more else line)
-                more = line.rstrip().endswith("\\")
-        return "\n".join(out) + "\n"
-
-
-def fenced_blocks(text: str, page: str = "page.md") -> list[Block]:
-    """Every fenced block of a Markdown text, with the marker of the line before it.
-
-    Examples
-    --------
-    >>> md = ("<!-- no-test: slow -->\\n```bash\\nradarsnn bench\\n```\\n"
-    ...       "```console\\n$ radarsnn validate x.yaml\\nx.yaml: ok\\n```\\n")
-    >>> [(b.line, b.lang, b.no_test, b.is_session) for b in fenced_blocks(md)]
-    [(2, 'bash', 'slow', True), (5, 'console', None, True)]
-    >>> fenced_blocks(md)[1].script()
-    'radarsnn validate x.yaml\\n'
-    """
-    lines, blocks, i = text.splitlines(), [], 0
-    while i < len(lines):
-        match = FENCE.match(lines[i].strip())
-        if match is None:
-            i += 1
-            continue
-        j = i + 1
-        while j < len(lines) and lines[j].strip() != "```":
-            j += 1
-        marker = MARKER.match(lines[i - 1].strip()) if i > 0 else None
-        kind, arg = (marker.group(1), marker.group(2)) if marker else (None, "")
-        blocks.append(Block(page=page, line=i + 1, lang=match.group(1),
-                            code="\n".join(lines[i + 1:j]) + "\n",
-                            no_test=arg if kind == "no-test" else None,
-                            requires=tuple(m.strip() for m in arg.split(",") if m.strip())
-                            if kind == "requires" else ()))
-        i = j + 1
-    return blocks
 
 
 def sessions(page: Path) -> list[Block]:

@@ -8,6 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from backends.reference import simulate
+from compiler.compile import motif_settings
 from compiler.lowering import LoweringContext, default_registry, lower_graph
 from compiler.lowering.dft_common import op_weights, sft_rmse
 from compiler.lowering.dft_fft import (
@@ -16,7 +17,6 @@ from compiler.lowering.dft_fft import (
     radix_plan,
     sfft_resources,
 )
-from compiler.lowering.options import motif_settings
 from ir import Graph
 from ir.errors import CompileError
 from ir.interpreter import evaluate

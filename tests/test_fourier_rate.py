@@ -9,11 +9,10 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from backends.reference import simulate
-from compiler.compile import lower_pass
+from compiler.compile import lower_pass, motif_settings
 from compiler.lowering import LoweringContext, default_registry, lower_graph
 from compiler.lowering.dft_common import modulus_rmse, real_weights
 from compiler.lowering.dft_rate import worst_case_bound
-from compiler.lowering.options import motif_settings
 from compiler.passes import CompileContext, Verify, run_pipeline
 from compiler.passes.calibrate import Calibrate
 from compiler.program import CompiledProgram

@@ -50,7 +50,7 @@ Examples
 ...      "k": 3, "alpha": 2.0},
 ...     {"id": "o", "op": "output", "input": "det"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_cfar(reg)
->>> from compiler.lowering.options import motif_settings
+>>> from compiler.compile import motif_settings
 >>> ctx = LoweringContext(graph=g, registry=reg, settings=motif_settings({"cfar_range": (0.1, 10)}))
 >>> net = lower_graph(ctx)[0].network
 >>> net.n_neurons, net.n_synapse_instances(), net.meta["cfar"]["det"]["code"]["kind"]

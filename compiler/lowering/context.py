@@ -63,7 +63,7 @@ class LoweringContext:
     motifs : mapping of str to str
         The user's motif choices: node id or op name → motif.
     settings : mapping of model class to model
-        The motifs' typed options (:func:`compiler.lowering.options.motif_settings`); a
+        The motifs' typed options (:func:`compiler.compile.motif_settings`); a
         model not given takes its defaults.
     calibration : dict
         Per-node calibration data from the calibrate pass (node id → record).

@@ -56,7 +56,7 @@ Examples
 ...     {"id": "f", "op": "dft", "input": "x", "axis": "sample", "out_axis": "bin"},
 ...     {"id": "o", "op": "output", "input": "f"}]})
 >>> reg = LoweringRegistry(); register_io(reg); register_rate(reg)
->>> from compiler.lowering.options import motif_settings
+>>> from compiler.compile import motif_settings
 >>> ctx = LoweringContext(graph=g, registry=reg, motifs={"dft": "rate"},
 ...                       settings=motif_settings({"time_steps": 2000}))
 >>> net = lower_graph(ctx)[0].network

@@ -4,8 +4,9 @@ Each motif family declares one frozen pydantic model; its fields are compile opt
 by name (``compile_graph(options={...})``, CLI ``--option``), each with its own
 default — every motif names its own step count (:class:`TimeDftOptions` 256,
 :class:`FftOptions` 256, :class:`RateOptions` 2000, :class:`CfarOptions` 100; the
-option ``time_steps`` overrides them all).  :func:`motif_settings` builds every model
-once from the checked options, before any pass runs, and the ``lower`` pass hands the
+option ``time_steps`` overrides them all).  :func:`compiler.compile.motif_settings`
+builds every model once from the checked options, before any pass runs (the one place
+that reads the options mapping), and the ``lower`` pass hands the
 result to the rules (:meth:`LoweringContext.settings_of
 <compiler.lowering.context.LoweringContext.settings_of>`): no rule reads an options
 mapping.  The same declaration gives ``compile_graph``'s option table
@@ -14,30 +15,21 @@ mapping.  The same declaration gives ``compile_graph``'s option table
 
 Examples
 --------
->>> settings = motif_settings({"time_steps": 64, "cfar_ties": "exact"})
->>> settings[CfarOptions].time_steps, settings[CfarOptions].cfar_ties
-(64, 'exact')
->>> motif_settings({})[RateOptions].time_steps, motif_settings({})[CfarOptions].time_steps
-(2000, 100)
->>> motif_settings({"charging": "often"})
-Traceback (most recent call last):
-...
-ir.errors.CompileError: compile option charging='often' must be auto, constant or companding
+>>> CfarOptions().time_steps, RateOptions().time_steps, CfarOptions(time_steps=64).time_steps
+(100, 2000, 64)
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field
 
 from compiler.lowering.charging import GUARD_RATIO
-from ir.errors import CompileError
-from ir.model import short_repr
 
 __all__ = ["MOTIF_OPTION_MODELS", "CfarOptions", "FftOptions", "MotifSettings", "RateOptions",
-           "ResonatorOptions", "TimeDftOptions", "TimeInputOptions", "motif_settings"]
+           "ResonatorOptions", "TimeDftOptions", "TimeInputOptions"]
 
 _Finite = Annotated[float, Field(allow_inf_nan=False)]
 _Pair = tuple[_Finite, _Finite]
@@ -128,24 +120,3 @@ MOTIF_OPTION_MODELS: tuple[type[BaseModel], ...] = (
 
 #: Model class -> its settings for one compile.
 MotifSettings = Mapping[type[BaseModel], BaseModel]
-
-
-def motif_settings(options: Mapping[str, Any]) -> dict[type[BaseModel], BaseModel]:
-    """Every model of :data:`MOTIF_OPTION_MODELS` filled from ``options`` (None: the default).
-
-    Raises
-    ------
-    CompileError
-        A value its field refuses, naming the option, the value and the rule.
-    """
-    out: dict[type[BaseModel], BaseModel] = {}
-    for model in MOTIF_OPTION_MODELS:
-        given = {k: options[k] for k in model.model_fields if options.get(k) is not None}
-        try:
-            out[model] = model.model_validate(given)
-        except ValidationError as err:
-            name = str(err.errors()[0]["loc"][0])
-            what = model.model_fields[name].description or name
-            raise CompileError(f"compile option {name}={short_repr(given[name])} must be "
-                               f"{what}") from None
-    return out

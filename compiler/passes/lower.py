@@ -29,7 +29,7 @@ class Lower(Pass):
     motifs : tuple of (str, str)
         The user's motif choices, node id or op name → motif (compile option ``motifs``).
     settings : tuple of models
-        The motifs' typed options (:func:`compiler.lowering.options.motif_settings`;
+        The motifs' typed options (:func:`compiler.compile.motif_settings`;
         ``compile_graph`` sets them; a model not given takes its defaults).
 
     Examples
