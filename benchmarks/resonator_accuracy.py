@@ -8,7 +8,8 @@
   resonator (read-out ``time`` with T steps, and ``graded``) and the time-coded S-FT
   compiled to the same number of steps per frame, on ``unbounded`` and ``loihi2``;
 * ``drift_table()`` — the fixed-point drift bound and the measured error of the loihi2
-  resonator for 8 … 16 coefficient fraction bits (8 = the weight format).
+  resonator for 8 … 18 coefficient fraction bits (8 = the weight format, 12 = the chip's
+  format), with periodic renormalisation off and on (``resonator_renorm``; on by default).
 
 Everything runs the closed-form engine (equal to the step engine, tests/test_resonator_*.py).
 """
@@ -79,22 +80,27 @@ def ti_table(readouts=(64, 128, 256)) -> None:
 
 
 def drift_table(bits=(8, 10, 12, 14, 16, 18)) -> None:
-    """Fixed-point drift on loihi2 against the coefficient fraction bits."""
+    """Fixed-point drift on loihi2 against the coefficient fraction bits, with and without
+    periodic renormalisation (``resonator_renorm``: off, and auto — the default)."""
     chirps, _ = load_ti_chirps()
     x = chirps[:4, :N].astype(np.float64)
     ref = np.fft.fft(x, axis=1)[:, :N // 2]
     print(f"\nloihi2 resonator, N = {N}, read-out T = 256: drift against coefficient bits")
-    print("| coef bits | drift bound | gain drift max | phase drift (rad) | abs RMSE | "
-          "Re/Im RMSE |")
-    print("|---|---|---|---|---|---|")
+    print("| coef bits | renorm | drift bound | weight error | gain drift max | "
+          "phase drift (rad) | abs RMSE | Re/Im RMSE |")
+    print("|---|---|---|---|---|---|---|---|")
     auto = _run(x, "loihi2", "resonator", 256)[1].networks[0].meta["resonator"]["f"]["coef_bits"]
     for f in sorted({*bits, auto}):
-        y, p = _run(x, "loihi2", "resonator", 256, resonator_coef_bits=f,
-                    resonator_drift_max=1e9, resonator_readout="time")
-        d = p.networks[0].meta["resonator"]["f"]
-        tag = " (auto)" if f == auto else ""
-        print(f"| {f}{tag} | {d['bound']:.4f} | {d['gain_drift']:.4f} | {d['phase_drift_rad']:.4f} "
-              f"| {magnitude_rmse(y, ref):.5f} | {sft_rmse(y, ref, n_fft=N):.5f} |")
+        for renorm in ("off", "auto"):
+            y, p = _run(x, "loihi2", "resonator", 256, resonator_coef_bits=f,
+                        resonator_drift_max=1e9, resonator_readout="time",
+                        resonator_renorm=renorm)
+            d = p.networks[0].meta["resonator"]["f"]
+            tag = " (chip format)" if f == auto else ""
+            how = f"every {d['renorm_steps']}" if d["renorm_steps"] else "none"
+            print(f"| {f}{tag} | {renorm}: {how} | {d['bound']:.4f} | {d['weight_error']:.4f} | "
+                  f"{d['gain_drift']:.4f} | {d['phase_drift_rad']:.4f} | "
+                  f"{magnitude_rmse(y, ref):.5f} | {sft_rmse(y, ref, n_fft=N):.5f} |")
 
 
 if __name__ == "__main__":

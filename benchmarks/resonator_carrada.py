@@ -1,9 +1,10 @@
 """The carrada chain with ``resonator`` range and Doppler stages beside the S-FT (issue 22).
 
 ``python benchmarks/resonator_carrada.py [--seeds 0 1 2]`` compiles
-``examples/chains/carrada_rd_oscfar.yaml`` for ``loihi2`` twice — the default S-FT motifs and
-``{rng: resonator, dop: resonator}`` — calibrated on one simulated CARRADA frame (seed 1000,
-the first 4 virtual channels, as the chain's ``rx: 4``), runs both on the scene frames of the
+``examples/chains/carrada_rd_oscfar.yaml`` for ``loihi2`` three times — the default S-FT
+motifs and ``{rng: resonator, dop: resonator}`` (renormalised, the default, and with
+``resonator_renorm: off``) — calibrated on one simulated CARRADA frame (seed 1000, the first
+4 virtual channels, as the chain's ``rx: 4``), runs each on the scene frames of the
 given seeds and prints the cell sensitivity and precision of their detections against the
 conventional chain (numpy), the synapses (total and of the two DFT stages) and the latency per
 frame from the resource report.
@@ -25,7 +26,11 @@ from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frame
 
 CHAIN = Path(__file__).resolve().parents[1] / "examples" / "chains" / "carrada_rd_oscfar.yaml"
-MOTIFS = {"S-FT (default)": {}, "resonator": {"dft": "resonator"}}
+#: Row name -> (motifs, options): the S-FT, the resonator (renormalised: the default) and the
+#: resonator with renormalisation off.
+MOTIFS = {"S-FT (default)": ({}, None),
+          "resonator (12-bit, renormalised: default)": ({"dft": "resonator"}, None),
+          "resonator (12-bit, renorm off)": ({"dft": "resonator"}, {"resonator_renorm": "off"})}
 
 
 def _frame(seed: int) -> np.ndarray:
@@ -44,9 +49,10 @@ def main(argv: list[str] | None = None) -> None:
     print("| motif | sensitivity | precision | cells (conv / spiking) | synapses | "
           "DFT synapses | latency steps/frame | latency s/frame | cores | compile+run s |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for name, motifs in MOTIFS.items():
+    for name, (motifs, options) in MOTIFS.items():
         t0 = time.perf_counter()
-        p = compile_graph(graph, "loihi2", motifs=motifs, calibration_inputs={"adc": calibration})
+        p = compile_graph(graph, "loihi2", motifs=motifs, calibration_inputs={"adc": calibration},
+                          options=options)
         hits = n_conv = n_spk = 0
         for s, x in frames.items():
             out = run_program(p, {"adc": x}, mode="auto", out_of_range="clip").values["out"]

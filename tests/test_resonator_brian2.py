@@ -1,6 +1,7 @@
 """Brian2 runs the resonator motif with the reference's spike steps (issue 22).
 
-The fixed-point (loihi2) networks are whole numbers throughout, so Brian2's own operation
+The fixed-point (loihi2) networks, plain or renormalised every 4 steps, are whole numbers
+throughout, so Brian2's own operation
 order gives exactly the reference's bits: every compartment spikes on the same step and
 the decoded outputs are equal.
 """
@@ -19,7 +20,7 @@ from compiler.compile import compile_graph  # noqa: E402
 from ir import Graph  # noqa: E402
 
 
-def _network(complex_in: bool, readout: str):
+def _network(complex_in: bool, readout: str, renorm="off"):
     n = 16
     g = Graph.from_dict({"name": "res", "nodes": [
         {"id": "x", "op": "input", "shape": {"chirp": 2, "sample": n}, "complex": complex_in},
@@ -28,14 +29,17 @@ def _network(complex_in: bool, readout: str):
     rng = np.random.default_rng(7)
     x = rng.normal(size=(2, n)) + (1j * rng.normal(size=(2, n)) if complex_in else 0)
     p = compile_graph(g, "loihi2", motifs={"f": "resonator"}, calibration_inputs={"x": x},
-                      time_steps=32, options={"resonator_readout": readout})
+                      time_steps=32, options={"resonator_readout": readout,
+                                                  "resonator_renorm": renorm})
     return p.networks[0], x
 
 
 @pytest.mark.parametrize("complex_in", [False, True])
 @pytest.mark.parametrize("readout", ["time", "graded"])
-def test_brian2_spike_steps_equal_the_reference(complex_in, readout):
-    net, x = _network(complex_in, readout)
+@pytest.mark.parametrize("renorm", ["off", 4])
+def test_brian2_spike_steps_equal_the_reference(complex_in, readout, renorm):
+    net, x = _network(complex_in, readout, renorm)
+    assert net.population["f/out"].params.renorm_steps == (0 if renorm == "off" else 4)
     ref = simulate(net, {"x": x}, mode="step")
     got = simulate_brian2(net, {"x": x})
     for pid, steps in ref.first_spike_steps.items():

@@ -69,6 +69,40 @@ def test_resonator_computes_the_dft_exactly_in_float():
     np.testing.assert_allclose(state.x + 1j * state.y, np.fft.fft(x), atol=1e-12)
 
 
+def test_hand_trace_renormalisation_turns_on_the_block_end_steps():
+    # â = 1 (no turn), ĉ = i (a quarter turn) every 2nd step counted back from the last
+    # input step 4: steps 0, 2, 4 turn; fed 8 at step 0, the state is 8i, −8, then 8i·i² …
+    one = 4096.0
+    par = _params(cos=(one,), sin=(0.0,), coef_bits=12, renorm_steps=2, cos_end=(0.0,),
+                  sin_end=(one,), phases=(Phase(start_step=0, spiking_on=False),
+                                          Phase(start_step=5, input_on=False)))
+    p = ResonatorStepParams.of(par, 6, integer=True, shape={"k": 1, "part": 4})
+    assert par.renorm_schedule(6).tolist() == [True, False, True, False, True, False]
+    state, zs = ResonatorState.zeros(1, integer=True), []
+    for t, x in enumerate([8, 0, 0, 0, 0, 0]):
+        _, state = resonator_step(state, np.array([x, 0, 0, 0]), p, t)
+        zs.append(complex(int(state.x[0]), int(state.y[0])))
+    assert zs == [8j, 8j, -8, -8, -8j, -8j]
+
+
+def test_renormalised_params_refuse_growth_float_and_missing_ends():
+    one = 4096.0
+    base = {"cos": (one,), "sin": (0.0,), "coef_bits": 12}
+    with pytest.raises(ValueError, match="must not grow the state"):
+        _params(**base, renorm_steps=2, cos_end=(one,), sin_end=(one,))
+    with pytest.raises(ValueError, match="at most 2\\^12"):
+        _params(**base, renorm_steps=2, cos_end=(one + 1,), sin_end=(0.0,))
+    with pytest.raises(ValueError, match="needs fixed-point"):
+        _params(cos=(1.0,), sin=(0.0,), renorm_steps=2, cos_end=(1.0,), sin_end=(0.0,))
+    with pytest.raises(ValueError, match="one value per index"):
+        _params(**base, renorm_steps=2)
+    with pytest.raises(ValueError, match="for renorm_steps > 0"):
+        _params(**base, cos_end=(one,), sin_end=(0.0,))
+    # a step coefficient just outside the unit circle is allowed when every block shrinks
+    _params(cos=(one,), sin=(30.0,), coef_bits=12, renorm_steps=4, cos_end=(4000.0,),
+            sin_end=(0.0,))
+
+
 def test_params_refuse_growth_and_spiking_while_rotating():
     with pytest.raises(ValueError, match="at most 1"):
         _params(cos=(1.0,), sin=(0.1,))
@@ -91,19 +125,25 @@ def test_stream_train_sends_levels_as_bit_planes():
     assert [tr.events_at(t).tolist() for t in range(4)] == [[0, 2], [0, 1], [0, 1, 2], []]
 
 
-def _network(k, bits, frames_fixed, t_out, theta, rho, coef_bits, scales):
-    """A stream source (real input, ± parts) feeding ``k`` resonators, time read-out."""
+def _network(k, bits, frames_fixed, t_out, theta, rho, coef_bits, scales, renorm=0,
+             theta_end=None):
+    """A stream source (real input, ± parts) feeding ``k`` resonators, time read-out
+    (``renorm`` > 0: block-end coefficients at ``theta_end`` every ``renorm`` steps)."""
     r = rho * (2.0 ** coef_bits if coef_bits else 1.0)
     c, s = r * np.cos(theta), r * np.sin(theta)
     if coef_bits:
         c, s = np.trunc(c), np.trunc(s)
+    ends = {}
+    if renorm:
+        ends = {"renorm_steps": renorm, "cos_end": tuple(np.trunc(r * np.cos(theta_end))),
+                "sin_end": tuple(np.trunc(r * np.sin(theta_end)))}
     n_in = frames_fixed
     phases = (Phase(start_step=0, spiking_on=False),
               Phase(start_step=n_in, bias=2.0, input_on=False),
               Phase(start_step=n_in + t_out, input_on=False, spiking_on=False))
     extra = {"scale_axis": "k", "scales": tuple(scales)} if scales else {}
     params = ResonatorParams(axis="k", cos=tuple(c), sin=tuple(s), coef_bits=coef_bits,
-                             v_th=2.0 * t_out + 1, phases=phases, **extra)
+                             v_th=2.0 * t_out + 1, phases=phases, **extra, **ends)
     b, p, q = (a.ravel() for a in np.meshgrid(np.arange(bits), np.arange(2), np.arange(k),
                                               indexing="ij"))
     proj = MatrixProjection(id="w", source="in", target="out", contract=("bit", "part"),
@@ -121,16 +161,18 @@ def _network(k, bits, frames_fixed, t_out, theta, rho, coef_bits, scales):
                   Decoder(port="v", population="out", kind="membrane", combine="re_im_signed")])
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(k=st.integers(1, 5), bits=st.integers(1, 5), n_in=st.integers(1, 12),
        t_out=st.integers(1, 16), seed=st.integers(0, 2 ** 16), fixed=st.booleans(),
-       rho=st.sampled_from([1.0, 0.9]), scaled=st.booleans(), frames=st.integers(1, 3))
+       rho=st.sampled_from([1.0, 0.9]), scaled=st.booleans(), frames=st.integers(1, 3),
+       renorm=st.sampled_from([0, 0, 2, 3, 5]))
 def test_closed_form_equals_step_engine(k, bits, n_in, t_out, seed, fixed, rho, scaled,
-                                        frames):
+                                        frames, renorm):
     rng = np.random.default_rng(seed)
     theta = rng.uniform(-np.pi, np.pi, k)
     scales = tuple(float(v) for v in rng.integers(1, 4, k)) if scaled else ()
-    net = _network(k, bits, n_in, t_out, theta, rho, 12 if fixed else 0, scales)
+    net = _network(k, bits, n_in, t_out, theta, rho, 12 if fixed else 0, scales,
+                   renorm=renorm if fixed else 0, theta_end=rng.uniform(-np.pi, np.pi, k))
     x = rng.uniform(-1, 1, (frames, 2, n_in))
     arith = "int64" if fixed else "float64"
     a = simulate(net, {"x": x}, mode="step", arithmetic=arith, record_spikes=True)

@@ -129,7 +129,9 @@ def build_model(
             code = (resonator_code if resonator else neuron_code)(pop.params, network.n_steps)
             namespace = {**code.constants,
                          **{name: b2.TimedArray(getattr(code, name), dt=1 * ms)
-                            for name in ("bias", "input_on", "spiking_on")}}
+                            for name in ("bias", "input_on", "spiking_on")},
+                         **{name: b2.TimedArray(values, dt=1 * ms)
+                            for name, values in code.timed.items()}}
             group = b2.NeuronGroup(n, code.model, threshold=code.threshold, reset=code.reset,
                                    namespace=namespace, dt=1 * ms)
             scale = pop.params.scale_of(pop.shape)

@@ -34,7 +34,7 @@ v >= v_th and spiking_on(t) > 0.5 and not fired
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -64,6 +64,8 @@ class NeuronCode:
         ``keep_u``, ``keep_v``, ``v_th``, ``v_reset`` (floats).
     bias, input_on, spiking_on : ndarray of float64
         One value per step, for ``TimedArray`` s named ``bias``, ``input_on``, ``spiking_on``.
+    timed : dict
+        Further per-step schedules by ``TimedArray`` name (a resonator's ``renorm``).
     """
 
     model: str
@@ -74,6 +76,7 @@ class NeuronCode:
     bias: np.ndarray
     input_on: np.ndarray
     spiking_on: np.ndarray
+    timed: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def neuron_code(params: NeuronParams, n_steps: int) -> NeuronCode:

@@ -9,14 +9,17 @@ abstract code, with ``on = input_on(t)``::
 
     xt = x + dx
     yt = y + dy
-    x  = on * rnd(C * xt - S * yt) + (1 - on) * x
-    y  = on * rnd(S * xt + C * yt) + (1 - on) * y
+    Cq = C + renorm(t) * (Ce - C)                 # renormalised populations only
+    Sq = S + renorm(t) * (Se - S)
+    x  = on * rnd(Cq * xt - Sq * yt) + (1 - on) * x
+    y  = on * rnd(Sq * xt + Cq * yt) + (1 - on) * y
     v  = on * (px * x + py * y) + (1 - on) * (v + c * bias(t))
 
 with ``rnd(q) = sign(q)·floor(|q|·2^-F + 1/2)`` for ``F = coef_bits > 0`` (plain
 products for ``F = 0``), ``(px, py)`` the compartment's projection ``(1, 0)``,
-``(−1, 0)``, ``(0, 1)``, ``(0, −1)``, threshold ``v >= c·v_th and spiking_on(t) > 0.5
-and not fired``.  In fixed point every value is a whole number, so Brian2's own
+``(−1, 0)``, ``(0, 1)``, ``(0, −1)``, ``renorm(t)`` 1 on the block-end steps of a
+renormalised population (other populations use ``C, S`` directly), threshold
+``v >= c·v_th and spiking_on(t) > 0.5 and not fired``.  In fixed point every value is a whole number, so Brian2's own
 operation order gives the reference's bits; with float coefficients the two agree to
 rounding.
 
@@ -42,6 +45,8 @@ __all__ = ["resonator_code", "fan_to_compartments", "compartment_constants", "ON
 _MODEL = ("x : 1\ny : 1\nv : 1\ndx : 1\ndy : 1\nfired : boolean\nI_in : 1\n"
           "C : 1 (constant)\nS : 1 (constant)\npx : 1 (constant)\npy : 1 (constant)\n"
           "c : 1 (constant)")
+#: The block-end coefficients of a renormalised population.
+_MODEL_END = "\nCe : 1 (constant)\nSe : 1 (constant)"
 #: Synapses into a resonator: the drive of the compartment they target, folded.
 SYNAPSE_MODEL = "wx : 1 (constant)\nwy : 1 (constant)"
 ON_PRE = "dx_post += wx\ndy_post += wy"
@@ -58,27 +63,35 @@ def _rnd(expr: str, bits: int) -> str:
 def resonator_code(params: ResonatorParams, n_steps: int) -> NeuronCode:
     """The Brian2 code of a resonator population over ``n_steps`` steps."""
     bias, input_on, spiking_on = params.schedule(n_steps)
-    f = params.coef_bits
+    f, renorm = params.coef_bits, bool(params.renorm_steps)
+    c, s = ("Cq", "Sq") if renorm else ("C", "S")
     update = "\n".join([
         "xt = x + dx", "yt = y + dy",
-        f"x = input_on(t) * ({_rnd('C * xt - S * yt', f)}) + (1 - input_on(t)) * x",
-        f"y = input_on(t) * ({_rnd('S * xt + C * yt', f)}) + (1 - input_on(t)) * y",
+        *(["Cq = C + renorm(t) * (Ce - C)", "Sq = S + renorm(t) * (Se - S)"] if renorm else []),
+        f"x = input_on(t) * ({_rnd(f'{c} * xt - {s} * yt', f)}) + (1 - input_on(t)) * x",
+        f"y = input_on(t) * ({_rnd(f'{s} * xt + {c} * yt', f)}) + (1 - input_on(t)) * y",
         "v = input_on(t) * (px * x + py * y) + (1 - input_on(t)) * (v + c * bias(t))",
         "dx = 0", "dy = 0"])
     return NeuronCode(
-        model=_MODEL, update=update,
+        model=_MODEL + (_MODEL_END if renorm else ""), update=update,
         threshold="v >= c * v_th and spiking_on(t) > 0.5 and not fired", reset="fired = True",
         constants={"v_th": float(params.v_th)}, bias=bias.astype(np.float64),
-        input_on=input_on.astype(np.float64), spiking_on=spiking_on.astype(np.float64))
+        input_on=input_on.astype(np.float64), spiking_on=spiking_on.astype(np.float64),
+        timed={"renorm": params.renorm_schedule(n_steps).astype(np.float64)} if renorm else {})
 
 
 def compartment_constants(params: ResonatorParams, shape: dict[str, int],
                           n_frames: int) -> dict[str, np.ndarray]:
-    """``C, S, px, py, c`` per Brian2 neuron (compartment) of ``n_frames`` frames."""
+    """``C, S, px, py, c`` (and ``Ce, Se``) per Brian2 neuron (compartment), ``n_frames`` frames."""
     cos, sin = params.per_resonator(shape)
     n_res = cos.size
     scale = params.scale_of(shape)
-    return {"C": np.tile(np.repeat(cos, N_COMPARTMENTS), n_frames),
+    ends = {}
+    if params.renorm_steps:
+        ce, se = params.per_resonator(shape, end=True)
+        ends = {"Ce": np.tile(np.repeat(ce, N_COMPARTMENTS), n_frames),
+                "Se": np.tile(np.repeat(se, N_COMPARTMENTS), n_frames)}
+    return {**ends, "C": np.tile(np.repeat(cos, N_COMPARTMENTS), n_frames),
             "S": np.tile(np.repeat(sin, N_COMPARTMENTS), n_frames),
             "px": np.tile(_AX, n_res * n_frames), "py": np.tile(_AY, n_res * n_frames),
             "c": np.ones(n_res * N_COMPARTMENTS * n_frames) if scale is None

@@ -4,7 +4,8 @@ population and the closed form (the neuron of :mod:`compiler.snn.resonator`).
 Per step, with ``d`` the summed input folded from the four compartments
 (``d = (I_0 − I_1) + i(I_2 − I_3)``):
 
-* input on: ``z ← a (z + d)`` and every compartment's membrane is ``v_c = σ_c(z)``
+* input on: ``z ← a (z + d)`` (``a_end`` on the block-end steps of a renormalised
+  population, ``renorm[t]``) and every compartment's membrane is ``v_c = σ_c(z)``
   (``σ = (Re, −Re, Im, −Im)``); the biases of input phases must be 0;
 * input off: ``z`` is held and ``v_c ← v_c + b(t)`` — the charging stage of the ramp
   neurons, so a fire-once compartment spikes at the first step with ``v_c ≥ v_th``.
@@ -60,22 +61,35 @@ class ResonatorStepParams(StepParams):
     cos: np.ndarray | None = None
     sin: np.ndarray | None = None
     coef_bits: int = 0
+    cos_end: np.ndarray | None = None
+    sin_end: np.ndarray | None = None
+    renorm: np.ndarray | None = None
 
     @classmethod
     def of(cls, params: ResonatorParams, n_steps: int, integer: bool = False,
            shape: dict[str, int] | None = None) -> ResonatorStepParams:
         """Resolve ``params`` for a population of ``shape`` over ``n_steps`` steps."""
         base = StepParams.from_params(params, n_steps, integer, shape)
-        c, s = params.per_resonator(shape or {params.axis: params.n_bins, "part": 4})
-        if integer:
-            c, s = c.astype(np.int64), s.astype(np.int64)
+        shape = shape or {params.axis: params.n_bins, "part": 4}
+        dt = np.int64 if integer else np.float64
+        c, s = (a.astype(dt) for a in params.per_resonator(shape))
+        ends = {}
+        if params.renorm_steps:
+            ce, se = (a.astype(dt) for a in params.per_resonator(shape, end=True))
+            ends = {"cos_end": ce, "sin_end": se, "renorm": params.renorm_schedule(n_steps)}
         fields = {k: getattr(base, k) for k in base.__dataclass_fields__}
-        return cls(**fields, cos=c, sin=s, coef_bits=params.coef_bits)
+        return cls(**fields, cos=c, sin=s, coef_bits=params.coef_bits, **ends)
 
-    def tiled(self, n_res: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(cos, sin)`` for ``n_res`` resonators (whole frames)."""
-        reps = n_res // self.cos.size
-        return np.tile(self.cos, reps), np.tile(self.sin, reps)
+    def tiled(self, n_res: int, end: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """``(cos, sin)`` for ``n_res`` resonators (whole frames); ``end``: the block-end
+        coefficients."""
+        c, s = (self.cos_end, self.sin_end) if end else (self.cos, self.sin)
+        reps = n_res // c.size
+        return np.tile(c, reps), np.tile(s, reps)
+
+    def at_block_end(self, t: int) -> bool:
+        """Whether step ``t`` rotates by the block-end coefficients."""
+        return self.renorm is not None and bool(self.renorm[t])
 
 
 class ResonatorState(NamedTuple):
@@ -151,7 +165,7 @@ def resonator_step(state: ResonatorState, current: np.ndarray | float,
     integer = params.integer
     if params.input_on[t]:
         dx, dy = _fold(current, n_res, state.x.dtype)
-        c, s = params.tiled(n_res)
+        c, s = params.tiled(n_res, params.at_block_end(t))
         x, y = rotate(state.x + dx, state.y + dy, c, s, params.coef_bits, integer)
         v = _project(x, y)
     else:
@@ -224,6 +238,7 @@ def solve_resonator(params: ResonatorStepParams, drive_of, n: int, first: np.nda
     state = ResonatorState.zeros(n_res, params.integer)
     x, y, v = state.x, state.y, state.v
     c, s = params.tiled(n_res)
+    ends = params.tiled(n_res, end=True) if params.renorm is not None else (c, s)
     chunk = max(1, (4 << 20) // max(1, n))
     for seg in params.spans:
         if not seg.input_on:
@@ -237,7 +252,9 @@ def solve_resonator(params: ResonatorStepParams, drive_of, n: int, first: np.nda
                 x, y = _power_sum(x, y, dx, dy, c, s)
             else:
                 for j in range(s1 - s0):  # fixed point: the step arithmetic itself
-                    x, y = rotate(x + dx[j], y + dy[j], c, s, params.coef_bits, params.integer)
+                    cj, sj = ends if params.at_block_end(s0 + j) else (c, s)
+                    x, y = rotate(x + dx[j], y + dy[j], cj, sj, params.coef_bits,
+                                  params.integer)
         v = _project(x, y)
     return v
 

@@ -112,6 +112,8 @@ class ResonatorOptions(BaseModel):
         None, description="an integer in 2..30 (fraction bits of the rotation coefficients)")
     resonator_decay: _Finite = Field(1.0, gt=0, le=1, description="a number in (0, 1]")
     resonator_drift_max: _Finite | None = Field(None, gt=0, description="a finite number > 0")
+    resonator_renorm: Literal["auto", "off"] | Annotated[int, Field(ge=2)] = Field(
+        "auto", description="auto, off or an integer >= 2 (steps per renormalised block)")
 
 
 #: Every motif family's option model (TimeInputOptions: the S-FT's input and read-out).

@@ -29,6 +29,14 @@ format of Lava's bit-accurate resonate-and-fire model (``sin_decay``/``cos_decay
 12 bits, shift 12), the only published one — chosen by
 :func:`~compiler.lowering.resonator_fixed.fixed_coefficients` (``|a| ≤ 1``, least
 drift); the state is scaled to about ``2^{state_bits − 2}`` at the calibrated full scale.
+Every ``M``-th step the rotation uses a second, block-end coefficient so that a block's
+product is exact to one rounding (*periodic renormalisation*, option
+``resonator_renorm``: ``auto`` picks ``M`` by the least weight error,
+:func:`~compiler.lowering.resonator_fixed.best_renorm`; ``off``; or a given ``M``): at
+``N = 1024`` with 12 bits the weight-error bound falls from 0.14 to 0.007.  It needs the
+neuron program to hold a second coefficient pair and count steps — an assumption about a
+programmable neuron (Orchard et al. 2021: Loihi 2's neurons are microcode programs), as
+is the resonator neuron itself.
 The drift bound is recorded (``meta["resonator"]``); above
 :data:`DRIFT_MAX` it is reported with a :class:`ResonatorDriftWarning` naming the bound
 and the ways out — the compiler never widens the chip's format by itself: wider
@@ -61,11 +69,14 @@ from compiler.lowering.options import ResonatorOptions
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.resonator_fixed import (
     CHIP_COEF_BITS,
+    Renorm,
+    best_renorm,
     bin_angles,
     bin_gains,
     drift_report,
     fixed_coefficients,
     float_coefficients,
+    renormalised_coefficients,
 )
 from compiler.lowering.time_code import TimeCode, calibration_of, headroom_of, time_steps
 from compiler.lowering.time_inputs import TimeInputOptions, encoder_headroom
@@ -175,23 +186,29 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     if not 0.0 < rho <= 1.0:
         raise CompileError(f"node {node!r}: resonator_decay={rho} is outside (0, 1]", node=node)
     integer = bool(getattr(ctx.target, "weight_bits", None))
+    renorm = None
     if integer:
         unit = code.step_of_level / 2 ** shift  # value of one state unit
-        c, s, f_bits = _coefficients(ctx, theta, rho, m, full / unit)
+        renorm, f_bits = _coefficients(ctx, node, theta, rho, m)
+        c, s = renorm.c, renorm.s
+        renorm = renorm if renorm.block else None
         w_level = 2.0 ** shift
     else:
         unit, f_bits, w_level = 1.0, 0, code.step_of_level
         c, s = float_coefficients(theta, rho)
     b, scales = _readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
-    drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit)
+    drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit,
+                         renorm=renorm)
     given = ctx.settings_of(ResonatorOptions).resonator_drift_max
     limit = DRIFT_MAX if given is None else float(given)
     if drift["bound"] > limit and given is None:
         warnings.warn(
             f"node {node!r}: resonator drift bound {drift['bound']:.4f} over N={m} steps with "
-            f"the chip's {f_bits}-bit rotation coefficients (gain drift "
-            f"{drift['gain_drift']:.4f}, divided out on a host read-out; phase drift "
-            f"{drift['phase_drift_rad']:.4f} rad); fewer samples per DFT, or "
+            f"the chip's {f_bits}-bit rotation coefficients (weight error "
+            f"{drift['weight_error']:.4f}, renormalised every {drift['renorm_steps']} steps "
+            f"(0: never); gain drift {drift['gain_drift']:.4f}, divided out on a host "
+            f"read-out; phase drift {drift['phase_drift_rad']:.4f} rad); "
+            "resonator_renorm='auto' if it is off, fewer samples per DFT, or "
             "resonator_coef_bits=16 if the chip's neurons multiply wider (an assumption: "
             "Lava's resonate-and-fire format is 12 bits), or the S-FT (motif time)",
             ResonatorDriftWarning, stacklevel=2)
@@ -211,8 +228,10 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
               Phase(start_step=m + (1 if graded else t_out), input_on=False, spiking_on=False))
     per_bin = {} if graded or scales is None else {"scale_axis": axes.out_axis,
                                                    "scales": tuple(scales)}
+    ends = ({"renorm_steps": renorm.block, "cos_end": tuple(renorm.c_end),
+             "sin_end": tuple(renorm.s_end)} if renorm is not None else {})
     params = ResonatorParams(axis=axes.out_axis, cos=tuple(c), sin=tuple(s), coef_bits=f_bits,
-                             v_th=v_th if not graded else 1.0, phases=phases, **per_bin)
+                             v_th=v_th if not graded else 1.0, phases=phases, **per_bin, **ends)
     out_type = ctx.types[node]
     pop = builder.population(node, "out", axes.out_shape(out_type, "re_im_signed"), params,
                              motif=MOTIF)
@@ -223,7 +242,8 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
         **drift, "stream_bits": bits, "readout": readout, "readout_steps": 1 if graded else t_out,
         "input_steps": m, "unit": unit, "bias": b, "v_th": v_th}
     # host read-outs divide out each bin's known fixed-point gain |g_k| (magnitude drift)
-    g_mag = np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits)) if f_bits else None
+    g_mag = (np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits, renorm=renorm))
+             if f_bits else None)
     if graded:
         comp = {"gain_axis": axes.out_axis, "gains": tuple(g_mag)} if f_bits else {}
         dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit / 2,
@@ -260,14 +280,27 @@ def _readout(ctx: LoweringContext, node: str) -> str:
     return readout
 
 
-def _coefficients(ctx: LoweringContext, theta: np.ndarray, rho: float, n: int,
-                  full_state: float) -> tuple[np.ndarray, np.ndarray, int]:
-    """Fixed-point coefficients: option ``resonator_coef_bits``, else the chip's format
-    (:data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS`), never widened here."""
-    given = ctx.settings_of(ResonatorOptions).resonator_coef_bits
-    f_bits = CHIP_COEF_BITS if given is None else int(given)
-    c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
-    return c, s, f_bits
+def _coefficients(ctx: LoweringContext, node: str, theta: np.ndarray, rho: float,
+                  n: int) -> tuple[Renorm, int]:
+    """Fixed-point coefficients and their renormalisation (``block`` 0: none).
+
+    Fraction bits: option ``resonator_coef_bits``, else the chip's format
+    (:data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS`), never widened here.
+    Option ``resonator_renorm``: ``auto`` (default) takes the block length with the least
+    weight error, or none where none helps; an integer fixes it; ``off`` never renormalises.
+    """
+    opts = ctx.settings_of(ResonatorOptions)
+    f_bits = CHIP_COEF_BITS if opts.resonator_coef_bits is None else int(opts.resonator_coef_bits)
+    mode = opts.resonator_renorm
+    if mode == "off":
+        c, s = fixed_coefficients(theta, rho, f_bits, n_steps=n)
+        return Renorm(c, s, c, s, 0), f_bits
+    if mode == "auto":
+        return best_renorm(theta, rho, f_bits, n_steps=n), f_bits
+    if mode > n:
+        raise CompileError(f"node {node!r}: resonator_renorm={mode} is longer than the {n} "
+                           f"input steps; give 2..{n}, 'auto' or 'off'", node=node)
+    return renormalised_coefficients(theta, rho, f_bits, n_steps=n, block=int(mode)), f_bits
 
 
 def _readout_scales(ctx: LoweringContext, node: str, rec, axis: str, full_state: float,

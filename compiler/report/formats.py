@@ -97,8 +97,9 @@ def format_rows(program) -> list[dict]:
             n_res = pop.size // 4 if pop is not None else 0
             coef = f"{r['coef_bits']}-bit" if r["coef_bits"] else "float"
             rows.append({"node": node, "item": node, "mechanism": "resonator",
-                         "detail": f"{r['stream_bits']}-bit stream, {coef} coefficients, drift "
-                                   f"bound {r['bound']:.3g} over {r['input_steps']} steps, "
+                         "detail": f"{r['stream_bits']}-bit stream, {coef} coefficients"
+                                   f"{_renorm(r)}, drift bound {r['bound']:.3g} over "
+                                   f"{r['input_steps']} steps, "
                                    f"{r['readout']} read-out: {r['input_steps']} + "
                                    f"{r['readout_steps']} steps per chirp",
                          "cost": f"{n_res:,} resonators x 2 x {profile.state_bits or 32} bits "
@@ -130,3 +131,9 @@ def _split_rows(program) -> list[dict]:
                                "computed exactly on the host",
                      "cost": f"{macs:,} host multiply-adds per frame"})
     return rows
+
+
+def _renorm(r: dict) -> str:
+    """``", renormalised every M steps"`` where a layer renormalises (older records: none)."""
+    m = r.get("renorm_steps") or 0
+    return f", renormalised every {m} steps" if m else ""

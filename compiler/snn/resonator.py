@@ -26,6 +26,15 @@ away from zero: ``x' = rnd((C·x̃ − S·ỹ)/2^F)``, ``y' = rnd((S·x̃ + C·�
 (float64 and int64) compute it exactly the same way.
 ``coef_bits = 0`` multiplies by the float coefficients.
 
+**Periodic renormalisation** (``renorm_steps = M > 0``, fixed point only): within each
+input span, the steps ``stop − 1, stop − 1 − M, …`` (every ``M``-th step, counted back from
+the span's last one) rotate by a second coefficient ``ĉ_k = (C'_k + iS'_k)/2^F`` instead
+of ``â_k``, chosen so that a block's product ``â^{M−1}ĉ`` is the exact ``a^M`` to one
+rounding (:mod:`compiler.lowering.resonator_fixed`).  Every component is at most ``2^F``
+in magnitude and every block's product at most 1 in modulus: the state does not grow
+over a block.  On a chip this is one more coefficient pair per bin and a step counter in
+the neuron program (an assumption about a programmable neuron, as the resonator itself).
+
 Examples
 --------
 >>> p = ResonatorParams(axis="k", cos=(1.0, 0.0), sin=(0.0, -1.0), v_th=4.0,
@@ -59,6 +68,11 @@ class ResonatorParams(NeuronParams):
         ``Re a_k`` and ``Im a_k`` per index of ``axis`` (times ``2^coef_bits`` in fixed point).
     coef_bits : int
         Fraction bits of the fixed-point coefficients (0: floating point).
+    renorm_steps : int
+        ``M``: every ``M``-th input step, counted back from the last, rotates by
+        ``(cos_end, sin_end)`` (0: never; see the module docstring).
+    cos_end, sin_end : tuple of float
+        The block-end coefficients per index of ``axis`` (``renorm_steps > 0`` only).
     du, dv, reset :
         Fixed: a resonator has no current or voltage decay of its own (``ρ`` is in ``a_k``)
         and fire-once compartments.
@@ -80,6 +94,9 @@ class ResonatorParams(NeuronParams):
     cos: tuple[float, ...]
     sin: tuple[float, ...]
     coef_bits: int = 0
+    renorm_steps: int = 0
+    cos_end: tuple[float, ...] = ()
+    sin_end: tuple[float, ...] = ()
 
     @model_validator(mode="after")
     def _resonator(self) -> ResonatorParams:
@@ -101,11 +118,39 @@ class ResonatorParams(NeuronParams):
         one = 4.0 ** self.coef_bits
         if self.coef_bits and not (np.all(c == np.rint(c)) and np.all(s == np.rint(s))):
             raise ValueError("fixed-point coefficients (coef_bits > 0) must be whole numbers")
+        if self.renorm_steps:
+            return self._renormalised(c, s)
+        if self.cos_end or self.sin_end:
+            raise ValueError("cos_end and sin_end are for renorm_steps > 0")
         big = c * c + s * s > one * (1 + 1e-12)
         if big.any():
             raise ValueError(f"|a_k| must be at most 1 (a bounded state); index "
                              f"{int(np.argmax(big))} has |a| = "
                              f"{float(np.sqrt((c * c + s * s)[big][0] / one)):.6f}")
+        return self
+
+    def _renormalised(self, c: np.ndarray, s: np.ndarray) -> ResonatorParams:
+        m, f = self.renorm_steps, self.coef_bits
+        if m < 2 or f == 0:
+            raise ValueError(f"renorm_steps must be 0 or >= 2 and needs fixed-point "
+                             f"coefficients (coef_bits > 0); got renorm_steps={m}, "
+                             f"coef_bits={f}")
+        if len(self.cos_end) != self.n_bins or len(self.sin_end) != self.n_bins:
+            raise ValueError(f"cos_end and sin_end need one value per index of {self.axis!r} "
+                             f"({self.n_bins}); got {len(self.cos_end)} and "
+                             f"{len(self.sin_end)}")
+        ce, se = np.asarray(self.cos_end), np.asarray(self.sin_end)
+        if not (np.all(ce == np.rint(ce)) and np.all(se == np.rint(se))):
+            raise ValueError("fixed-point coefficients (coef_bits > 0) must be whole numbers")
+        top = np.max(np.abs(np.concatenate([c, s, ce, se])))
+        if top > 2.0 ** f:
+            raise ValueError(f"coefficient components must be at most 2^{f} = {2 ** f} in "
+                             f"magnitude; got {top:.0f}")
+        block = ((c * c + s * s) / 4.0 ** f) ** ((m - 1) / 2) * np.hypot(ce, se) / 2.0 ** f
+        if np.any(block > 1 + 1e-9):
+            k = int(np.argmax(block))
+            raise ValueError(f"a block of {m} steps must not grow the state: index {k} has "
+                             f"|a|^{m - 1}|a_end| = {block[k]:.6f} > 1")
         return self
 
     @property
@@ -117,8 +162,32 @@ class ResonatorParams(NeuronParams):
         """Valid for int64 arithmetic: whole thresholds/biases and fixed-point coefficients."""
         return self.coef_bits > 0 and super().is_integer()
 
-    def per_resonator(self, shape: dict[str, int]) -> tuple[np.ndarray, np.ndarray]:
-        """``(cos, sin)`` per resonator, flattened over ``shape`` without its ``part`` axis.
+    def renorm_schedule(self, n_steps: int) -> np.ndarray:
+        """Per step, whether it rotates by the block-end coefficient (``renorm_steps``).
+
+        Examples
+        --------
+        >>> p = ResonatorParams(axis="k", cos=(4096.0,), sin=(0.0,), coef_bits=12,
+        ...                     renorm_steps=2, cos_end=(4096.0,), sin_end=(0.0,),
+        ...                     phases=(Phase(start_step=0, spiking_on=False),
+        ...                             Phase(start_step=5, input_on=False)))
+        >>> p.renorm_schedule(7).astype(int).tolist()
+        [1, 0, 1, 0, 1, 0, 0]
+        """
+        out = np.zeros(n_steps, bool)
+        if not self.renorm_steps:
+            return out
+        on = np.concatenate([[False], self.schedule(n_steps)[1], [False]]).astype(np.int8)
+        edges = np.diff(on)
+        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        for start, stop in zip(starts, stops, strict=True):
+            out[np.arange(stop - 1, start - 1, -self.renorm_steps)] = True
+        return out
+
+    def per_resonator(self, shape: dict[str, int], end: bool = False
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """``(cos, sin)`` per resonator, flattened over ``shape`` without its ``part`` axis
+        (``end``: the block-end coefficients of a renormalised population).
 
         Examples
         --------
@@ -131,7 +200,7 @@ class ResonatorParams(NeuronParams):
         view[axes.index(self.axis)] = self.n_bins
         dims = tuple(shape[a] for a in axes)
         out = []
-        for values in (self.cos, self.sin):
+        for values in ((self.cos_end, self.sin_end) if end else (self.cos, self.sin)):
             a = np.asarray(values, np.float64).reshape(view)
             out.append(np.broadcast_to(a, dims).reshape(-1).copy())
         return out[0], out[1]
