@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from backends.reference import run_program
@@ -42,6 +42,7 @@ def _products(c, s, c_end, s_end, bits, n, block):
 @settings(max_examples=40, deadline=None)
 @given(n=st.integers(4, 300), bits=st.integers(6, 14), block=st.integers(0, 40),
        rho=st.sampled_from([1.0, 0.97]), seed=st.integers(0, 2 ** 16))
+@example(n=34, bits=13, block=7, rho=0.97, seed=39848)  # |â|² within 1e-10 of ρ²: 1 − q^n cancelled
 def test_closed_form_bounds_equal_the_multiplied_out_schedule(n, bits, block, rho, seed):
     theta = np.random.default_rng(seed).uniform(-np.pi, np.pi, 5)
     block = block if 2 <= block <= n else 0
@@ -55,14 +56,16 @@ def test_closed_form_bounds_equal_the_multiplied_out_schedule(n, bits, block, rh
     p = _products(c, s, ce, se, bits, n, block)
     ideal = (rho * np.exp(1j * theta))[None] ** (n - np.arange(n))[:, None]
     eps = p / ideal - 1
-    np.testing.assert_allclose(weight_errors(c, s, theta, n, rho=rho, bits=bits, renorm=r),
-                               np.sqrt(np.mean(np.abs(eps) ** 2, axis=0)), atol=2e-7)
+    # compared squared: the closed form's last step, Σ|P|²/N − 2Re ΣP/N + 1, is exact to
+    # about 1e-15, its square root then only to ~1e-8 near zero
+    np.testing.assert_allclose(weight_errors(c, s, theta, n, rho=rho, bits=bits, renorm=r) ** 2,
+                               np.mean(np.abs(eps) ** 2, axis=0), rtol=1e-7, atol=1e-13)
     own = np.sum(p * np.exp(-1j * theta)[None] ** (n - np.arange(n))[:, None], axis=0)
     np.testing.assert_allclose(bin_gains(c, s, theta, n, rho=rho, bits=bits, renorm=r),
                                own / np.sum(rho ** np.arange(1, n + 1)), atol=1e-9)
     rep = drift_report(c, s, theta, n_steps=n, rho=rho, bits=bits, full_state=0, renorm=r)
-    assert rep["phase_drift_rad"] == pytest.approx(np.max(np.abs(np.angle(p / ideal))),
-                                                   abs=1e-9)
+    drift = np.unwrap(np.angle(p / ideal)[::-1], axis=0)  # accumulated from the last step
+    assert rep["phase_drift_rad"] == pytest.approx(np.max(np.abs(drift)), abs=1e-9)
     assert rep["renorm_steps"] == block
 
 
