@@ -25,9 +25,11 @@ from __future__ import annotations
 import networkx as nx
 import numpy as np
 
+from backends.reference.delivery import synapses_per_source
 from backends.reference.encoding import Train
+from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
-from backends.reference.order import first_spike_steps, order_by_step
+from backends.reference.order import first_spike_steps
 from backends.reference.plan import SimPlan, closed_form_problems
 from backends.reference.resonator import ResonatorStepParams, solve_resonator
 from backends.reference.result import Activity
@@ -88,60 +90,61 @@ def run_closed(
     net, n_steps = plan.network, plan.network.n_steps
     g = nx.DiGraph([(p.source, p.target) for p in net.projections])
     g.add_nodes_from(plan.populations)
-    spikes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    spikes: dict[str, Fired] = {}
     membrane, first = {}, {}
     for pid in nx.lexicographical_topological_sort(g):
         if pid in trains:
-            spikes[pid] = trains[pid].all_events()
+            spikes[pid] = _fired_of_train(trains[pid], n_steps)
         else:
-            spikes[pid], membrane[pid], first[pid] = _solve(plan, pid, spikes, n_frames,
-                                                             block_bytes)
-    events = {}
-    for qid, dl in plan.deliveries.items():
-        flat, step = spikes[dl.source]
-        events[qid] = sum(dl.n_events(k, flat[:_arriving(step, d, n_steps)])
-                          for k, d in enumerate(dl.delays))
+            first[pid], membrane[pid] = _solve(plan, pid, spikes, n_frames, block_bytes)
+            spikes[pid] = Fired.of_first(first[pid], n_steps)
+    events = {qid: sum(_synaptic_events(dl, k, d, spikes[dl.source])
+                       for k, d in enumerate(dl.delays)) for qid, dl in plan.deliveries.items()}
     counts, rasters = {}, {} if record else None
     for pid, pop in plan.populations.items():
-        flat, step = spikes[pid]
-        n = n_frames * pop.size
-        if pid not in first and getattr(trains[pid], "at_most_once", False):
-            first[pid] = np.full(n, -1, np.int64)  # a latency train: one spike at most
-            first[pid][flat] = step
-        if pid in first:  # fire-once neurons and latency trains: at most one spike each
-            counts[pid] = (first[pid] >= 0).astype(np.int64).reshape(n_frames, -1)
+        fired, n = spikes[pid], n_frames * pop.size
+        if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
+            first[pid] = fired.first
+            counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
         else:
+            flat, step = fired.events()
             counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
             first[pid] = first_spike_steps(flat, step, n)
         first[pid] = first[pid].reshape(n_frames, -1)
         if rasters is not None:
+            flat, step = fired.events()
             rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
             f, i = np.divmod(flat, pop.size)
             rasters[pid][f, step, i] = True
     return Activity(first, counts, membrane, events, rasters)
 
 
-def _arriving(step: np.ndarray, delay: int, n_steps: int) -> int:
-    """How many of the step-sorted spikes arrive within the window through ``delay``."""
-    return int(np.searchsorted(step, n_steps - delay))
+def _fired_of_train(train: Train, n_steps: int) -> Fired:
+    """A source's spikes: first-spike steps of a latency train, else its events."""
+    if train.at_most_once:  # a latency train: it carries its first-spike steps
+        return Fired.of_first(train.first, n_steps)
+    return Fired.of_events(*train.all_events(), n_steps)
+
+
+def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
+    """Synaptic events of delay class ``k``: the spikes arriving within the window."""
+    if fired.first is None:
+        flat, step = fired.events()
+        return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])
+    per_source = synapses_per_source(dl, k)
+    arriving = fired.arriving(delay, fired.n_steps).reshape(-1, per_source.size)
+    return int(np.sum(np.broadcast_to(per_source, arriving.shape), where=arriving))
 
 
 def _solve(
-    plan: SimPlan, pid: str, spikes: dict, n_frames: int, block_bytes: int
-) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray, np.ndarray]:
-    """Spike events ``(flat, step)``, end membranes and first spike steps of ``pid``.
-
-    The events are ordered by step (ties by neuron) when a projection reads them.
-    """
+    plan: SimPlan, pid: str, spikes: dict[str, Fired], n_frames: int, block_bytes: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """First spike steps (flat, ``-1``: none) and end membranes of ``pid``."""
     params = plan.neurons[pid]
     n_steps = plan.network.n_steps
-    arrivals = []
-    for qid in plan.incoming[pid]:
-        dl = plan.deliveries[qid]
-        flat, step = spikes[dl.source]
-        for k, d in enumerate(dl.delays):
-            stop = _arriving(step, d, n_steps)
-            arrivals.append(Arrivals(dl, k, flat[:stop], step[:stop] + d if d else step[:stop]))
+    arrivals = [Arrivals(plan.deliveries[qid], k, d, spikes[plan.deliveries[qid].source],
+                         n_steps)
+                for qid in plan.incoming[pid] for k, d in enumerate(plan.deliveries[qid].delays)]
     pop = plan.populations[pid]
     n = n_frames * pop.size
     dtype = np.int64 if plan.integer else np.float64
@@ -152,11 +155,7 @@ def _solve(
     else:
         v = _solve_neurons(plan, pid, params, arrivals, spikes, n_frames, block_bytes, u, v,
                            first)
-    flat = np.flatnonzero(first >= 0)
-    if not any(q.source == pid for q in plan.network.projections):
-        return (flat, first[flat]), v.reshape(n_frames, -1), first  # nobody reads them by step
-    order = order_by_step(first[flat], n_steps)  # flat is ascending: ties stay by neuron
-    return (flat[order], first[flat][order]), v.reshape(n_frames, -1), first
+    return first, v.reshape(n_frames, -1)
 
 
 def _solve_neurons(plan: SimPlan, pid: str, params, arrivals: list, spikes: dict,

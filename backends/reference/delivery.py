@@ -37,7 +37,7 @@ from compiler.snn.projections import MatrixProjection, StencilProjection
 
 __all__ = ["MatrixDelivery", "StencilDelivery", "Delivery", "DELIVERY_BUILDERS",
            "IN_PLACE_ADDERS", "SYNAPSE_COUNTS", "TRAIN_CURRENTS", "TrainCurrents", "add_current",
-           "step_blocks", "synapses_per_source"]
+           "step_blocks", "synapses_per_source", "FEATURE_CURRENTS"]
 
 Delivery = MatrixDelivery | StencilDelivery
 
@@ -50,6 +50,13 @@ DELIVERY_BUILDERS: dict[type, Callable[..., Delivery]] = {
 #: In-place adders by delivery type, ``(delivery, k, events, n_batch, out) -> None``; a type
 #: missing here is added densely (``out += current(...)``).
 IN_PLACE_ADDERS: dict[type, Callable[..., None]] = {MatrixDelivery: MatrixDelivery.add_to}
+
+#: Dense-feature currents by delivery type: ``(applies(delivery, k, n_events, n_batch),
+#: current(delivery, k, feature, n_batch))`` (:meth:`MatrixDelivery.feature_current`); a
+#: type missing here always delivers events.
+FEATURE_CURRENTS: dict[type, tuple[Callable[..., bool], Callable[..., np.ndarray]]] = {
+    MatrixDelivery: (MatrixDelivery.dense_for, MatrixDelivery.feature_current),
+}
 
 #: Synapses per source neuron by delivery type, ``(delivery, k) -> int64 (source size,)``.
 SYNAPSE_COUNTS: dict[type, Callable[..., np.ndarray]] = {

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -45,42 +46,54 @@ _CHUNK_ELEMENTS = 1 << 22
 class LatencyTrain:
     """At most one spike per source neuron, at its encoded step.
 
+    ``first`` holds each neuron's step (``-1``: none); the events ordered by step, which
+    the step engine reads, are sorted once on first use (the closed form's silent spans
+    read ``first`` directly).
+
     Examples
     --------
     >>> import numpy as np
     >>> from compiler.snn import LatencyCode
     >>> tr = LatencyTrain.build(LatencyCode(t_max=4, x_min=0.0, x_max=1.0),
     ...                         np.array([[1.0, 0.5, 0.0]]), n_steps=8)
-    >>> tr.events_at(0).tolist(), tr.events_at(2).tolist(), [a.tolist() for a in tr.all_events()]
-    ([0], [1], [[0, 1], [0, 2]])
+    >>> tr.first.tolist(), tr.events_at(0).tolist(), tr.events_at(2).tolist()
+    ([0, 2, -1], [0], [1])
+    >>> [a.tolist() for a in tr.all_events()]
+    [[0, 1], [0, 2]]
     """
 
-    flat: np.ndarray
-    steps: np.ndarray
-    bounds: np.ndarray
+    first: np.ndarray
+    n_steps: int
     #: Each neuron spikes at most once (the step engine then keeps first spikes only).
     at_most_once: ClassVar[bool] = True
 
     @classmethod
     def build(cls, code: LatencyCode, values: np.ndarray, n_steps: int) -> LatencyTrain:
         """Spike steps of ``values`` (shape ``(frames, size)``) under ``code``."""
-        limit = min(code.t_max, n_steps)
         steps = code.spike_steps(values).ravel()
-        flat = np.flatnonzero(steps < limit)
-        steps = steps[flat]
-        # stable by step (ties by index): a one-pass radix sort when steps fit a byte
-        order = (np.argsort(steps.astype(np.uint8), kind="stable") if limit <= 256
-                 else order_by_step(steps, n_steps))
+        steps[steps >= min(code.t_max, n_steps)] = -1
+        return cls(steps, n_steps)
+
+    @cached_property
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(flat, steps, bounds)``: events stable by step (ties by index), step bounds."""
+        flat = np.flatnonzero(self.first >= 0)
+        steps = self.first[flat]
+        # a one-pass radix sort when steps fit a byte
+        order = (np.argsort(steps.astype(np.uint8), kind="stable") if self.n_steps <= 256
+                 else order_by_step(steps, self.n_steps))
         flat, steps = flat[order], steps[order]
-        return cls(flat, steps, np.searchsorted(steps, np.arange(n_steps + 1)))
+        return flat, steps, np.searchsorted(steps, np.arange(self.n_steps + 1))
 
     def events_at(self, t: int) -> np.ndarray:
         """Flat indices of the neurons spiking at step ``t``, ascending."""
-        return self.flat[self.bounds[t]:self.bounds[t + 1]]
+        flat, _, bounds = self._sorted
+        return flat[bounds[t]:bounds[t + 1]]
 
     def all_events(self) -> tuple[np.ndarray, np.ndarray]:
         """``(flat, step)`` of every spike in the frame."""
-        return self.flat, self.steps
+        flat, steps, _ = self._sorted
+        return flat, steps
 
 
 @dataclass(frozen=True, eq=False)

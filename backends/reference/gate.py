@@ -129,7 +129,7 @@ def solve_gated(
         Membrane at the span start and first spike steps (``-1`` none), flat
         over ``(frames, neurons)``; ``first`` is updated in place.
     spikes : dict
-        ``(flat, step)`` of every source population solved so far.
+        :class:`~backends.reference.fired.Fired` of every source population solved so far.
     n_frames : int
     need_u : bool
         Whether a later span reads the end current.
@@ -147,7 +147,7 @@ def solve_gated(
     dtype = v.dtype
     # the gate: per target, its weight (0 = no spike in the span) and its arrival step
     dl = plan.deliveries[gates.gate]
-    flat, step = spikes[dl.source]
+    flat, step = spikes[dl.source].events()
     arrive = step + dl.delays[0]
     keep = (arrive >= s0) & (arrive < s1)
     flat, arrive = flat[keep], arrive[keep]
@@ -167,7 +167,7 @@ def solve_gated(
         u_end += dl.current(0, flat[last], n_frames).reshape(-1)
     for qid in gates.stencils:
         st = plan.deliveries[qid]
-        flat_s, step_s = spikes[st.source]
+        flat_s, step_s = spikes[st.source].events()
         n_src = n_frames * st.src_size
         for k, d in enumerate(st.delays):
             arr = step_s + d
@@ -179,7 +179,7 @@ def solve_gated(
             arrive_map[f] = a
             arrive_map = arrive_map.reshape(n_frames, *st.src_dims)
             v_at = v_at + st.weight_not_after(k, arrive_map, when).reshape(-1)
-            total = total + st.correlate(k, (arrive_map != _NEVER).astype(dtype)).reshape(-1)
+            total = total + st.correlate(k, arrive_map != _NEVER).reshape(-1)
             if need_u:
                 last = a == s1 - 1
                 u_end += st.current(k, f[last], n_frames).reshape(-1)

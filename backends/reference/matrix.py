@@ -364,6 +364,55 @@ class MatrixDelivery:
         out *= factor.out_sign
         return out
 
+    def dense_for(self, k: int, n_events: int | None, n_batch: int) -> bool:
+        """Whether :meth:`feature_current` serves weighted events of class ``k`` (the
+        folded whole-batch product :meth:`current` itself takes for ``n_events`` of them;
+        ``None``: whether it could for some count)."""
+        if self.integer or sp.issparse(self.weights[k]) or self.factors[k] is None:
+            return False
+        return n_events is None or n_events * _DENSE_EVENTS_PER_ROW >= (
+            n_batch * self.n_reps * self.n_in)
+
+    def feature_current(self, k: int, feature: np.ndarray, n_batch: int) -> np.ndarray:
+        """:meth:`current` of weighted events given as a dense per-source ``feature``.
+
+        ``feature`` (float64, ``n_batch × source size``) holds each source neuron's event
+        value, 0 for none: the one-hot fold is then one bincount over the source neurons
+        in their own order, no event gathers.  The fold's entries are sums of at most two
+        values (a sign-symmetric pair), each a whole number in the closed form, so the
+        result equals :meth:`current`'s bit for bit (:meth:`dense_for` must hold).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from compiler.snn import MatrixProjection, Population
+        >>> n = 64  # a cosine matrix: rows and columns equal up to sign fold to 33 × 33
+        >>> w = np.round(256 * np.cos(2 * np.pi * np.outer(np.arange(n), np.arange(n)) / n)) / 256
+        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
+        ...                      produce=("o",), weights=w)
+        >>> d = MatrixDelivery.build(p, Population(id="a", shape={"i": n}, source=True),
+        ...                          Population(id="b", shape={"o": n}))
+        >>> events, values = np.array([1, 5, 40, 63]), np.array([3.0, 1.0, 2.0, 4.0])
+        >>> feature = np.zeros(n)
+        >>> feature[events] = values
+        >>> ref = d.current(0, events, 1, values=values)
+        >>> out = d.feature_current(0, feature, 1)
+        >>> d.dense_for(0, events.size, 1), bool(np.array_equal(out, ref))
+        (True, True)
+        """
+        factor, (slot, sign) = self.factors[k], self.factor_slots[k]
+        n_core = factor.core.shape[0]
+        rows = n_batch * self.n_reps
+        if n_batch > 1:
+            slot = (np.arange(n_batch)[:, None] * (self.n_reps * n_core) + slot).ravel()
+            sign = np.broadcast_to(sign, (n_batch, sign.size)).ravel()
+        one_hot = np.bincount(slot, weights=sign * feature, minlength=rows * n_core)
+        product = one_hot.reshape(-1, n_core) @ factor.core
+        out = np.take(product, factor.out_col, axis=1)
+        out *= factor.out_sign
+        block = out.reshape(n_batch, *self.block_shape)
+        return block.transpose(0, *(1 + a for a in self.to_target))
+
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
         # flat batch indices -> neurons by one vectorised remainder (np.take's mode="wrap"

@@ -32,10 +32,12 @@ place) and returns ``(u, v)`` at its end.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from backends.reference.delivery import Delivery
+from backends.reference.delivery import FEATURE_CURRENTS, Delivery
+from backends.reference.fired import Fired
 from backends.reference.neuron import NeuronState, PhaseSpan, StepParams, neuron_step
 
 __all__ = ["Arrivals", "charge", "silent", "drive", "driven"]
@@ -43,17 +45,44 @@ __all__ = ["Arrivals", "charge", "silent", "drive", "driven"]
 
 @dataclass(frozen=True)
 class Arrivals:
-    """Spikes of one source through one delay class, sorted by arrival step."""
+    """The spikes of one source through one delay class, arriving before ``n_steps``."""
 
     delivery: Delivery
     k: int
-    flat: np.ndarray
-    arrive: np.ndarray
+    delay: int
+    fired: Fired
+    n_steps: int
+
+    @cached_property
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(flat, arrival step)`` sorted by arrival, cut at the window end."""
+        flat, step = self.fired.events()
+        stop = int(np.searchsorted(step, self.n_steps - self.delay))
+        return flat[:stop], step[:stop] + self.delay if self.delay else step[:stop]
 
     def within(self, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
         """The spikes arriving in ``[start, stop)``: ``(flat, arrival step)``."""
-        lo, hi = np.searchsorted(self.arrive, (start, stop))
-        return self.flat[lo:hi], self.arrive[lo:hi]
+        flat, arrive = self._sorted
+        lo, hi = np.searchsorted(arrive, (start, stop))
+        return flat[lo:hi], arrive[lo:hi]
+
+    def dense_current(self, start: int, stop: int, n_frames: int,
+                      weighted: bool) -> np.ndarray | None:
+        """The span's current from the source's first-spike steps, no events; or None.
+
+        ``Σ_j w_j (stop − a_j)`` (weighted) or ``Σ_j w_j`` over the arrivals in
+        ``[start, stop)``, as ``delivery.current`` of those events with those values
+        gives it, bit for bit; None where the source is not a first-spike record or
+        the delivery has no dense feature product for them.
+        """
+        applies, current = FEATURE_CURRENTS.get(type(self.delivery), (None, None))
+        if self.fired.first is None or applies is None or not applies(
+                self.delivery, self.k, None, n_frames):
+            return None
+        feature = self.fired.arrival_features(self.delay, start, stop, weighted)
+        if not applies(self.delivery, self.k, int(np.count_nonzero(feature)), n_frames):
+            return None
+        return current(self.delivery, self.k, feature, n_frames)
 
 
 def charge(
@@ -113,6 +142,10 @@ def silent(
     total = np.zeros((n_frames, *dims), u.dtype)
     second = np.zeros(total.shape, total.dtype)
     for arr in arrivals:
+        if (params.du == 0.0 and not need_u
+                and (cur := arr.dense_current(s0, s1, n_frames, weighted=True)) is not None):
+            second += cur  # the bulk of a silent stage: no events, no sort
+            continue
         flat, arrive = arr.within(s0, s1)
         if not flat.size:
             continue

@@ -264,14 +264,22 @@ class StencilDelivery:
         >>> d.correlate(0, np.array([[1.0, 2.0, 3.0, 4.0]])).tolist()
         [[8.0, 7.0, 10.0, 5.0]]
         """
-        out = np.zeros((source_map.shape[0], *self.tgt_dims), source_map.dtype)
+        if source_map.dtype == bool:  # a spike mask: count in 16 bits (exact), then weigh
+            out = np.zeros((source_map.shape[0], *self.tgt_dims),
+                           np.int64 if self.integer else np.float64)
+            source_map = source_map.astype(self._count_dtype(k))
+        else:
+            out = np.zeros((source_map.shape[0], *self.tgt_dims), source_map.dtype)
         for w, views in self._shifted(k, source_map, 0):
             part = views[0].copy()
             for view in views[1:]:
                 part += view
-            part *= w
-            out += part
+            out += np.multiply(part, w, dtype=out.dtype)
         return out
+
+    def _count_dtype(self, k: int):
+        """The narrowest integer that holds a count of class ``k``'s taps."""
+        return np.uint16 if self.offsets[k].shape[0] < np.iinfo(np.uint16).max else np.int64
 
     def weight_not_after(self, k: int, arrive_map: np.ndarray, when: np.ndarray) -> np.ndarray:
         r"""Per target ``y``: ``Σ_o K[o] [a(y + o) <= t_y]`` — the weight arrived by ``t_y``.
@@ -305,16 +313,20 @@ class StencilDelivery:
         >>> d.weight_not_after(0, np.array([[0, 5, 2, 9]]), np.array([[3, 3, 3, 3]])).tolist()
         [[0.0, -2.0, 0.0, -1.0]]
         """
-        never = np.iinfo(np.int64).max
         out = np.zeros(when.shape, np.int64 if self.integer else np.float64)
-        count = np.zeros(when.shape, np.int32)
+        # arrivals after the last t_y never count, so clip them there and compare in 16 bits
+        late = int(when.max()) + 1 if when.size else 0
+        narrow = np.int16 if late < np.iinfo(np.int16).max else np.int64
+        arrive_map = np.minimum(arrive_map, late).astype(narrow, copy=False)
+        when = when.astype(narrow, copy=False)
+        count = np.zeros(when.shape, self._count_dtype(k))
         hit = np.empty(when.shape, bool)
-        for w, views in self._shifted(k, arrive_map, never):
+        for w, views in self._shifted(k, arrive_map, late):
             count[...] = 0
             for view in views:
                 np.less_equal(view, when, out=hit)
                 count += hit
-            out += w * count
+            out += np.multiply(count, w, dtype=out.dtype)
         return out
 
     def n_events(self, k: int, events: np.ndarray) -> int:
