@@ -133,7 +133,7 @@ def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
         return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])
     per_source = synapses_per_source(dl, k)
     arriving = fired.arriving(delay, fired.n_steps).reshape(-1, per_source.size)
-    return int(np.sum(np.broadcast_to(per_source, arriving.shape), where=arriving))
+    return int(np.sum(arriving @ per_source))  # bool @ int64: exact, no masked reduction
 
 
 def _solve(

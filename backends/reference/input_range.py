@@ -136,7 +136,9 @@ def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
         else:
             edge = code.t_min - 0.5
             bound = float(code.value_of(np.array(edge)))
-            bad = (parts > bound) | ((parts == bound) & (np.rint(edge) < code.t_min))
+            bad = parts > bound
+            if np.rint(edge) < code.t_min:  # the bound itself rounds to before t_min
+                bad |= parts == bound
     else:
         rate = code.max_rate * (parts - code.x_min) / (code.x_max - code.x_min)
         bad = np.floor(n_steps * rate + code.phase) > np.floor(n_steps * code.max_rate

@@ -20,6 +20,7 @@ only the rows hit.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from math import prod
 
 import numpy as np
@@ -377,10 +378,10 @@ class MatrixDelivery:
         """:meth:`current` of weighted events given as a dense per-source ``feature``.
 
         ``feature`` (float64, ``n_batch × source size``) holds each source neuron's event
-        value, 0 for none: the one-hot fold is then one bincount over the source neurons
-        in their own order, no event gathers.  The fold's entries are sums of at most two
-        values (a sign-symmetric pair), each a whole number in the closed form, so the
-        result equals :meth:`current`'s bit for bit (:meth:`dense_for` must hold).
+        value, 0 for none: the one-hot fold is then one sparse product with the fixed fold
+        of source neurons onto the core's rows (:attr:`_folds`), no event gathers.  In the
+        closed form the values are whole numbers and the fold's sums exact, so the result
+        equals :meth:`current`'s bit for bit (:meth:`dense_for` must hold).
 
         Examples
         --------
@@ -400,18 +401,38 @@ class MatrixDelivery:
         >>> d.dense_for(0, events.size, 1), bool(np.array_equal(out, ref))
         (True, True)
         """
-        factor, (slot, sign) = self.factors[k], self.factor_slots[k]
+        factor, fold = self.factors[k], self._folds[k]
         n_core = factor.core.shape[0]
-        rows = n_batch * self.n_reps
-        if n_batch > 1:
-            slot = (np.arange(n_batch)[:, None] * (self.n_reps * n_core) + slot).ravel()
-            sign = np.broadcast_to(sign, (n_batch, sign.size)).ravel()
-        one_hot = np.bincount(slot, weights=sign * feature, minlength=rows * n_core)
+        if n_batch == 1:
+            one_hot = fold @ feature
+        else:
+            one_hot = (fold @ feature.reshape(n_batch, -1).T).T
         product = one_hot.reshape(-1, n_core) @ factor.core
         out = np.take(product, factor.out_col, axis=1)
         out *= factor.out_sign
         block = out.reshape(n_batch, *self.block_shape)
         return block.transpose(0, *(1 + a for a in self.to_target))
+
+    @cached_property
+    def _folds(self) -> tuple[sp.csr_matrix | None, ...]:
+        """Per class with a factor: the fold of source neurons onto the core's rows.
+
+        A ``(n_reps · core rows) × source size`` CSR of the signs (one entry per source
+        neuron whose row is not zero), so ``fold @ feature`` is the one-hot fold of
+        :meth:`_folded_product`; built on first use.
+        """
+        folds = []
+        for factor, slots in zip(self.factors, self.factor_slots, strict=True):
+            if factor is None:
+                folds.append(None)
+                continue
+            slot, sign = slots
+            keep = np.flatnonzero(sign != 0)
+            fold = sp.csr_matrix((sign[keep], (slot[keep], keep)),
+                                 shape=(self.n_reps * factor.core.shape[0], slot.size))
+            fold.sort_indices()
+            folds.append(fold)
+        return tuple(folds)
 
     def n_events(self, k: int, events: np.ndarray) -> int:
         """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""

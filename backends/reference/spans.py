@@ -102,7 +102,8 @@ def charge(
     if seg.spiking_on:
         v_th_all = params.per_neuron(params.v_th, v.size)
         top = end if b0 > 0 else np.maximum(v + b_all, end)
-        idle = np.flatnonzero((top >= v_th_all) & (first < 0))
+        idle = np.flatnonzero(top >= v_th_all)
+        idle = idle[first[idle] < 0]
         w = v[idle]
         b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
         if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
@@ -123,8 +124,10 @@ def charge(
             k += probe < v_th
         else:
             k = np.where(w + b >= v_th, 1, n + 1)
-        hit = k <= n
-        first[idle[hit]] = seg.start + k[hit].astype(np.int64) - 1
+        step = k.astype(np.int64)  # idle neurons have first = −1: write every one
+        step += seg.start - 1
+        step[step >= seg.stop] = -1
+        first[idle] = step
     return np.zeros(v.shape, v.dtype), end
 
 

@@ -57,14 +57,16 @@ def split_values(x: np.ndarray, split: PartLayout) -> np.ndarray:
     x = np.asarray(x)
     if split == "none":
         return x
-    re, im = np.real(x).astype(np.float64), np.imag(x).astype(np.float64)
+    re, im = np.real(x), np.imag(x)
+    out = np.empty((*x.shape, 2 if split in ("re_im", "signed") else 4), np.float64)
     if split == "re_im":
-        parts = (re, im)
-    elif split == "signed":
-        parts = (np.maximum(re, 0.0), np.maximum(-re, 0.0))
-    else:
-        parts = (np.maximum(re, 0), np.maximum(-re, 0), np.maximum(im, 0), np.maximum(-im, 0))
-    return np.stack(parts, axis=-1)
+        out[..., 0], out[..., 1] = re, im
+        return out
+    for i, comp in enumerate((re,) if split == "signed" else (re, im)):
+        np.maximum(comp, 0.0, out=out[..., 2 * i])     # the same operations as
+        np.negative(comp, out=out[..., 2 * i + 1])     # maximum(c, 0), maximum(−c, 0),
+        np.maximum(out[..., 2 * i + 1], 0.0, out=out[..., 2 * i + 1])  # written in place
+    return out
 
 
 def combine_parts(y: np.ndarray, combine: PartLayout) -> np.ndarray:
