@@ -23,6 +23,7 @@ is no later than a per-target step (the closed form's gated neurons).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from math import prod
 
 import numpy as np
@@ -219,22 +220,27 @@ class StencilDelivery:
         clipped edge read ``fill``.
         """
         tmap = source_map.transpose(0, *(1 + a for a in self.src_axis_of))
-        offsets = self.offsets[k]
-        before = np.maximum(0, -offsets.min(axis=0, initial=0))
-        after = np.maximum(0, offsets.max(axis=0, initial=0))
-        for j, axis in enumerate(self.map_axes):
-            pad = [(0, 0)] * tmap.ndim
-            pad[1 + axis] = (int(before[j]), int(after[j]))
-            tmap = (np.pad(tmap, pad, mode="wrap") if self.wrap[j]
-                    else np.pad(tmap, pad, constant_values=fill))
-        groups: dict[object, list] = {}
-        for w, off in zip(self.tap_weights[k].tolist(), offsets, strict=True):
-            index = [slice(None)] * tmap.ndim
-            for j, axis in enumerate(self.map_axes):
-                start = int(before[j] + off[j])
-                index[1 + axis] = slice(start, start + self.tgt_dims[axis])
-            groups.setdefault(w, []).append(tmap[tuple(index)])
-        return list(groups.items())
+        before, after, groups = self._tap_slices[k]
+        padded = _pad(tmap, self.map_axes, before, after, self.wrap, fill)
+        return [(w, [padded[index] for index in slices]) for w, slices in groups]
+
+    @cached_property
+    def _tap_slices(self) -> tuple:
+        """Per class: the margins before/after each map axis and, per distinct weight, the
+        index of every tap's view into the padded map (built once)."""
+        out = []
+        for k, offsets in enumerate(self.offsets):
+            before = np.maximum(0, -offsets.min(axis=0, initial=0))
+            after = np.maximum(0, offsets.max(axis=0, initial=0))
+            groups: dict[object, list] = {}
+            for w, off in zip(self.tap_weights[k].tolist(), offsets, strict=True):
+                index = [slice(None)] * (1 + len(self.tgt_dims))
+                for j, axis in enumerate(self.map_axes):
+                    start = int(before[j] + off[j])
+                    index[1 + axis] = slice(start, start + self.tgt_dims[axis])
+                groups.setdefault(w, []).append(tuple(index))
+            out.append((before, after, list(groups.items())))
+        return tuple(out)
 
     def correlate(self, k: int, source_map: np.ndarray) -> np.ndarray:
         r"""Dense delivery of a whole value map: ``I[y] = Σ_o K[o] s[y + o]``.
@@ -333,3 +339,40 @@ class StencilDelivery:
         """Synaptic events of the events of delay class ``k`` (taps landing inside the map)."""
         # one vectorised remainder, not np.take(mode="wrap") (a loop per index, see matrix.py)
         return int(self.synapses[k][events % self.src_size].sum())
+
+
+def _pad(tmap: np.ndarray, map_axes: tuple[int, ...], before: np.ndarray, after: np.ndarray,
+         wrap: tuple[bool, ...], fill) -> np.ndarray:
+    """``tmap`` padded along each map axis as ``np.pad`` does axis after axis: ``wrap``
+    copies the far side, else ``fill`` (without np.pad's per-call overhead)."""
+    if any(w and max(before[j], after[j]) > tmap.shape[1 + a]
+           for j, (a, w) in enumerate(zip(map_axes, wrap, strict=True))):
+        for j, a in enumerate(map_axes):  # margins wider than the map: np.pad repeats it
+            pad = [(0, 0)] * tmap.ndim
+            pad[1 + a] = (int(before[j]), int(after[j]))
+            tmap = (np.pad(tmap, pad, mode="wrap") if wrap[j]
+                    else np.pad(tmap, pad, constant_values=fill))
+        return tmap
+    shape = list(tmap.shape)
+    inner = [slice(None)] * tmap.ndim
+    for j, a in enumerate(map_axes):
+        shape[1 + a] += int(before[j] + after[j])
+        inner[1 + a] = slice(int(before[j]), int(before[j]) + tmap.shape[1 + a])
+    padded = np.empty(shape, tmap.dtype)
+    padded[tuple(inner)] = tmap
+    # each axis's margins over the whole extent of the others: a later axis overwrites its
+    # own margins, so the result is np.pad's (axis 0 padded first, then axis 1 over it)
+    for j, a in enumerate(map_axes):
+        b, e, n = int(before[j]), int(after[j]), tmap.shape[1 + a]
+        for part, src in ((slice(0, b), slice(n, n + b)), (slice(b + n, b + n + e),
+                                                            slice(b, b + e))):
+            if part.stop > part.start:
+                lead = [slice(None)] * tmap.ndim
+                lead[1 + a] = part
+                if wrap[j]:
+                    take = list(lead)
+                    take[1 + a] = src
+                    padded[tuple(lead)] = padded[tuple(take)]
+                else:
+                    padded[tuple(lead)] = fill
+    return padded
