@@ -143,7 +143,11 @@ def out_of_range(code: LatencyCode | RateCode, parts: np.ndarray, n_parts: int,
         rate = code.max_rate * (parts - code.x_min) / (code.x_max - code.x_min)
         bad = np.floor(n_steps * rate + code.phase) > np.floor(n_steps * code.max_rate
                                                                + code.phase)
-    return bad.any(axis=-1) if n_parts else bad
+    if not n_parts:
+        return bad
+    if n_parts in (2, 4, 8) and bad.flags.c_contiguous:  # the parts' flags as one word each
+        return bad.view(f"u{n_parts}")[..., 0] != 0
+    return bad.any(axis=-1)
 
 
 def check_range(port: str, code: LatencyCode | RateCode, parts: np.ndarray, *, n_parts: int,

@@ -407,11 +407,29 @@ class MatrixDelivery:
             one_hot = fold @ feature
         else:
             one_hot = (fold @ feature.reshape(n_batch, -1).T).T
-        product = one_hot.reshape(-1, n_core) @ factor.core
-        out = np.take(product, factor.out_col, axis=1)
-        out *= factor.out_sign
-        block = out.reshape(n_batch, *self.block_shape)
-        return block.transpose(0, *(1 + a for a in self.to_target))
+        product = (one_hot.reshape(-1, n_core) @ factor.core).reshape(n_batch, -1)
+        spread, sign = self._spreads[k]
+        # the core's columns spread to the target's neurons in target order, with their signs
+        out = np.take(product, spread, axis=1)
+        out *= sign
+        return out.reshape(n_batch, *(self.block_shape[a] for a in self.to_target))
+
+    @cached_property
+    def _spreads(self) -> tuple[tuple[np.ndarray, np.ndarray] | None, ...]:
+        """Per class with a factor: for each target neuron (target order) its entry of the
+        ``(n_reps, core columns)`` product and its sign (built on first use)."""
+        out = []
+        for factor in self.factors:
+            if factor is None:
+                out.append(None)
+                continue
+            size = self.n_reps * self.n_out
+            entry = (np.arange(size) if self.target_index is None
+                     else np.argsort(self.target_index.ravel()))  # block entry per target
+            rep, col = np.divmod(entry, self.n_out)
+            out.append((rep * factor.core.shape[1] + factor.out_col[col],
+                        factor.out_sign[col]))
+        return tuple(out)
 
     @cached_property
     def _folds(self) -> tuple[sp.csr_matrix | None, ...]:
