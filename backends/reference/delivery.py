@@ -31,7 +31,7 @@ from collections.abc import Callable
 import numpy as np
 
 from backends.reference.matrix import MatrixDelivery
-from backends.reference.row_sums import SEQUENTIAL_MAX, run_starts
+from backends.reference.row_sums import SEQUENTIAL_MAX, long_run_sums, run_starts
 from backends.reference.stencil import StencilDelivery
 from compiler.snn.projections import MatrixProjection, StencilProjection
 
@@ -282,9 +282,8 @@ class TrainCurrents:
             owners = self._owner_local[o0:o1]
             sums[owners] += tail
             deep = self._deep[block]
-            if deep:  # long runs: numpy's own pairwise reduction
+            if deep:  # long runs: numpy's own pairwise order
                 first, length = self._owner_span[o0:o0 + deep].T
-                begin = np.cumsum(length) - length  # where each run starts in `run`
-                run = np.repeat(first - begin, length) + np.arange(int(length.sum()))
-                sums[owners[:deep]] = np.add.reduceat(table[self._cols[run]], begin, axis=0)
+                sums[owners[:deep]] = long_run_sums(
+                    lambda at: np.take(table, self._cols[at], axis=0), first, length)
         self._block, self._sums = block, sums

@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SEQUENTIAL_MAX", "distinct_rows", "grouped_sums", "n_runs", "run_starts"]
+__all__ = ["SEQUENTIAL_MAX", "PAIRWISE_BLOCK", "distinct_rows", "grouped_sums", "long_run_sums",
+           "n_runs", "run_starts"]
 
 #: Runs of more addends than this are summed by ``np.add.reduceat`` itself (numpy's pairwise
 #: summation is sequential only below 8 tail addends).
@@ -122,16 +123,16 @@ def grouped_sums(
     ...             == np.add.reduceat(r, [0, 1, 6], axis=0)))
     True
     """
-    def gather(at: np.ndarray, offset: int = 0) -> np.ndarray:
+    def gather(at: np.ndarray, offset: int | None = None) -> np.ndarray:
         """``table[index[at]] * scale[at]``, into the workspace from ``offset`` if given."""
-        got = np.take(table, index[at], axis=0,
-                      out=None if workspace is None else workspace[offset:offset + at.size])
+        got = np.take(table, index[at], axis=0, out=None if workspace is None or offset is None
+                      else workspace[offset:offset + at.size])
         if scale is not None:
             np.multiply(got, scale[at][:, None], out=got)
         return got
 
     starts = run_starts(rows) if rows.size else rows
-    sums = gather(starts)  # the run heads
+    sums = gather(starts, 0)  # the run heads
     if starts.size == rows.size:  # one addend per run
         return rows, sums
     counts = np.empty_like(starts)
@@ -152,12 +153,54 @@ def grouped_sums(
         tail[:n_at[j]] += tails[ends[j - 1]:ends[j]]
     sums[owner] += tail
     deep = int(np.count_nonzero(length > SEQUENTIAL_MAX))
-    if deep:  # long runs: numpy's own pairwise reduction
-        lengths = length[:deep]
-        begin = np.cumsum(lengths) - lengths  # where each long run starts in `run`
-        run = np.repeat(first[:deep] - begin, lengths) + np.arange(int(lengths.sum()))
-        long = table[index[run]]
-        if scale is not None:
-            long = long * scale[run][:, None]
-        sums[owner[:deep]] = np.add.reduceat(long, begin, axis=0)
+    if deep:  # long runs: numpy's own pairwise order
+        sums[owner[:deep]] = long_run_sums(gather, first[:deep], length[:deep])
     return rows[starts], sums
+
+
+#: Tail addends numpy's pairwise sum adds without splitting (its ``PW_BLOCKSIZE``).
+PAIRWISE_BLOCK = 128
+
+
+def long_run_sums(gather, first: np.ndarray, length: np.ndarray) -> np.ndarray:
+    r"""The sums of runs of more than :data:`SEQUENTIAL_MAX` addends, bit for bit as
+    ``np.add.reduceat`` adds them, vectorised over the runs.
+
+    ``gather(at)`` returns the addend rows at positions ``at``; run ``i`` holds the
+    addends ``first[i] … first[i] + length[i] − 1``.  numpy adds a run's head ``w_1`` to
+    the pairwise sum of its tail of ``n ≥ 8`` addends: eight partial sums
+    ``r_j = t_j + t_{j+8} + t_{j+16} + …`` over the whole blocks of eight,
+    ``((r_0 + r_1) + (r_2 + r_3)) + ((r_4 + r_5) + (r_6 + r_7))``, then the ``n mod 8`` last
+    addends one by one.  Each step is done for every run at once (runs needing it).  A
+    tail over :data:`PAIRWISE_BLOCK` (numpy then splits it recursively) goes through
+    ``np.add.reduceat`` itself.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> w = np.random.default_rng(1).standard_normal((40, 3))
+    >>> first, length = np.array([0, 12]), np.array([12, 28])
+    >>> ref = np.add.reduceat(w, [0, 12], axis=0)
+    >>> bool(np.array_equal(long_run_sums(lambda at: w[at], first, length), ref))
+    True
+    """
+    n = length - 1
+    if int(n.max()) > PAIRWISE_BLOCK:
+        begin = np.cumsum(length) - length
+        run = np.repeat(first - begin, length) + np.arange(int(length.sum()))
+        return np.add.reduceat(gather(run), begin, axis=0)
+    base = first + 1
+    eight = np.arange(8)
+    whole = n - n % 8
+    part = gather((base[:, None] + eight).ravel()).reshape(first.size, 8, -1)
+    for block in range(1, int(whole.max()) // 8):
+        more = np.flatnonzero(whole > 8 * block)
+        part[more] += gather((base[more, None] + 8 * block + eight).ravel()).reshape(
+            more.size, 8, -1)
+    r = [part[:, j] for j in range(8)]
+    out = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    rest = n % 8
+    for q in range(int(rest.max())):
+        more = np.flatnonzero(rest > q)
+        out[more] += gather(base[more] + whole[more] + q)
+    return gather(first) + out
