@@ -57,7 +57,8 @@ def split_values(x: np.ndarray, split: PartLayout) -> np.ndarray:
     x = np.asarray(x)
     if split == "none":
         return x
-    re, im = np.real(x), np.imag(x)
+    # as float64 (a view of complex128 or float64 values, a copy of anything else)
+    re, im = np.real(x).astype(np.float64, copy=False), np.imag(x).astype(np.float64, copy=False)
     out = np.empty((*x.shape, 2 if split in ("re_im", "signed") else 4), np.float64)
     if split == "re_im":
         out[..., 0], out[..., 1] = re, im
