@@ -120,9 +120,11 @@ def run_closed(
 
 
 def _fired_of_train(train: Train, n_steps: int) -> Fired:
-    """A source's spikes: first-spike steps of a latency train, else its events."""
-    if train.at_most_once:  # a latency train: it carries its first-spike steps
-        return Fired.of_first(train.first, n_steps)
+    """A source's spikes: the first-spike steps of an at-most-once train that has them
+    (:class:`~backends.reference.encoding.LatencyTrain`), else its events."""
+    first = getattr(train, "first", None) if train.at_most_once else None
+    if first is not None:  # a latency train carries its first-spike steps
+        return Fired.of_first(first, n_steps)
     return Fired.of_events(*train.all_events(), n_steps)
 
 
