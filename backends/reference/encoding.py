@@ -31,7 +31,7 @@ from typing import ClassVar
 import numpy as np
 
 from backends.reference.input_range import DEFAULT_POLICY, check_policy, check_range
-from backends.reference.order import order_by_step
+from backends.reference.order import events_of_first
 from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
 from compiler.snn.stream import BIT_AXIS, StreamCode
@@ -77,12 +77,7 @@ class LatencyTrain:
     @cached_property
     def _sorted(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(flat, steps, bounds)``: events stable by step (ties by index), step bounds."""
-        flat = np.flatnonzero(self.first >= 0)
-        steps = self.first[flat]
-        # a one-pass radix sort when steps fit a byte
-        order = (np.argsort(steps.astype(np.uint8), kind="stable") if self.n_steps <= 256
-                 else order_by_step(steps, self.n_steps))
-        flat, steps = flat[order], steps[order]
+        flat, steps = events_of_first(self.first, self.n_steps)
         return flat, steps, np.searchsorted(steps, np.arange(self.n_steps + 1))
 
     def events_at(self, t: int) -> np.ndarray:

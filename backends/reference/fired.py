@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backends.reference.order import order_by_step
+from backends.reference.order import events_of_first
 
 __all__ = ["Fired"]
 
@@ -61,10 +61,7 @@ class Fired:
     def events(self) -> tuple[np.ndarray, np.ndarray]:
         """``(flat, step)`` ordered by step, ties by neuron (built once from ``first``)."""
         if self._events is None:
-            flat = np.flatnonzero(self.fired_mask)
-            step = self.first[flat]
-            order = order_by_step(step, self.n_steps)  # flat is ascending: ties stay by neuron
-            self._events = (flat[order], step[order])
+            self._events = events_of_first(self.first, self.n_steps)
         return self._events
 
     def arrival_features(self, delay: int, start: int, stop: int, weighted: bool) -> np.ndarray:

@@ -18,14 +18,30 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["first_spike_steps", "order_by_step"]
+__all__ = ["events_of_first", "first_spike_steps", "order_by_step"]
 
 
 def order_by_step(steps: np.ndarray, n_steps: int) -> np.ndarray:
-    """The stable permutation sorting ``steps`` (ints in ``[0, n_steps)``) ascending."""
-    if n_steps <= np.iinfo(np.uint16).max:
-        return np.argsort(steps.astype(np.uint16), kind="stable")
+    """The stable permutation sorting ``steps`` (ints in ``[0, n_steps)``) ascending
+    (a one-pass radix sort when the steps fit a byte, two when they fit 16 bits)."""
+    for narrow in (np.uint8, np.uint16):
+        if n_steps <= np.iinfo(narrow).max + 1:
+            return np.argsort(steps.astype(narrow), kind="stable")
     return np.argsort(steps, kind="stable")
+
+
+def events_of_first(first: np.ndarray, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(flat, step)`` of first-spike steps (``-1``: none), ordered by step, ties by neuron.
+
+    Examples
+    --------
+    >>> [a.tolist() for a in events_of_first(np.array([3, -1, 0, 3, 1, 0]), n_steps=5)]
+    [[2, 5, 4, 0, 3], [0, 0, 1, 3, 3]]
+    """
+    flat = np.flatnonzero(first >= 0)
+    step = first[flat]
+    order = order_by_step(step, n_steps)  # flat is ascending: ties stay by neuron
+    return flat[order], step[order]
 
 
 def first_spike_steps(flat: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
