@@ -11,7 +11,8 @@ computed from figures of the same run, never across runs.
 
 The *floor* (:mod:`backends.reference.floor`) is the dense matrix products the
 closed form must apply — the same shared matrices, as plain numpy products —
-timed in the same run: ``closed_over_floor`` says what the rest of the closed
+timed in the same run, each of its runs in turn with one of the closed form's (so a
+drift of the host's speed moves both alike): ``closed_over_floor`` says what the rest of the closed
 form (encoding, the analytic crossings, the CFAR, decoding) costs on top.  The
 load average (1, 5, 15 min) is read before and after the timings.
 
@@ -32,7 +33,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
-__all__ = ["BenchReport", "chain_inputs", "median_s", "run_bench"]
+__all__ = ["BenchReport", "chain_inputs", "interleaved_medians", "median_s", "run_bench"]
 
 
 def median_s(fn: Callable[[], object], repeats: int = 5) -> float:
@@ -44,6 +45,29 @@ def median_s(fn: Callable[[], object], repeats: int = 5) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+def interleaved_medians(fns: dict[str, Callable[[], object]], repeats: int = 5) -> dict[str, float]:
+    """Median wall time of each of ``fns``, their calls taken in turn (after one warm-up each).
+
+    Timing ``a`` seven times and then ``b`` seven times lets a drift of the host's
+    speed (another tenant, a frequency step) between the two series bias ``a / b``;
+    taken in turn, both series see the same host.
+
+    Examples
+    --------
+    >>> sorted(interleaved_medians({"a": lambda: None, "b": lambda: None}, repeats=3))
+    ['a', 'b']
+    """
+    for fn in fns.values():
+        fn()
+    times: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return {name: statistics.median(ts) for name, ts in times.items()}
 
 
 def _peak_rss_gb() -> float:
@@ -188,7 +212,7 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     from threadpoolctl import threadpool_limits
 
     from backends.reference import program_plans, run_program
-    from backends.reference.floor import floor_products, time_floor
+    from backends.reference.floor import floor_calls, floor_products
     from compiler.chains import range_doppler_chain
     from compiler.compile import compile_graph
     from ir import Graph, evaluate
@@ -217,12 +241,12 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
         say("bench", "conventional done")
         for mode in modes:
             n = repeats if mode != "step" else (step_repeats or repeats)
-            report.seconds[mode] = median_s(
-                lambda m=mode: run_program(program, {"adc": frame}, mode=m, plans=plans,
-                                           out_of_range="clip"), n)
+            run = {mode: lambda m=mode: run_program(program, {"adc": frame}, mode=m,
+                                                    plans=plans, out_of_range="clip")}
+            if mode == "closed" and products:  # the floor in turn with the closed form
+                run.update(floor_calls(products))
+            report.seconds.update(interleaved_medians(run, n))
             say("bench", f"{mode} done")
-            if mode == "closed" and products:
-                report.seconds.update(time_floor(products, repeats))
         report.peak_rss_gb = _peak_rss_gb()
         if brian2:
             _range_stage(config, frame, calibration, repeats, report)

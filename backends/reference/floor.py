@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +48,7 @@ import scipy.sparse as sp
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
 
-__all__ = ["FloorProduct", "floor_products", "time_floor"]
+__all__ = ["FloorProduct", "floor_calls", "floor_products", "time_floor"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,11 +101,12 @@ def _features(rows: int, cols: int, n_steps: int, dtype, seed: int) -> np.ndarra
     return rng.integers(0, n_steps + 1, size=(rows, cols)).astype(dtype)
 
 
-def time_floor(products: list[FloorProduct], repeats: int = 5, seed: int = 0) -> dict[str, float]:
-    """Median seconds of all the dense products (``floor``) and of their cores (``floor_core``).
+def floor_calls(products: list[FloorProduct], seed: int = 0) -> dict[str, Callable[[], None]]:
+    """``{"floor": run, "floor_core": run}``: each call does all the dense products (or cores).
 
-    The operands are built once, outside the timing; each timed run is the
-    products alone, one after the other.
+    The operands are built once, here; a call is the products alone, one after the
+    other (what :func:`time_floor` times, and what ``radarsnn bench`` interleaves with
+    the closed form's runs).
     """
     dense = [(_features(p.rows, p.weights.shape[0], p.n_steps, p.weights.dtype, seed + i),
               p.weights) for i, p in enumerate(products)]
@@ -112,13 +114,28 @@ def time_floor(products: list[FloorProduct], repeats: int = 5, seed: int = 0) ->
                         p.n_steps, p.weights.dtype, seed + i),
               p.core if p.core is not None else p.weights) for i, p in enumerate(products)]
 
-    def median_s(pairs) -> float:  # after one warm-up run, as compiler.bench.median_s
-        times = []
-        for _ in range(repeats + 1):
-            t0 = time.perf_counter()
+    def run(pairs) -> Callable[[], None]:
+        def products_once() -> None:
             for x, w in pairs:
                 x @ w
-            times.append(time.perf_counter() - t0)
-        return statistics.median(times[1:])
+        return products_once
 
-    return {"floor": median_s(dense), "floor_core": median_s(cores)}
+    return {"floor": run(dense), "floor_core": run(cores)}
+
+
+def time_floor(products: list[FloorProduct], repeats: int = 5, seed: int = 0) -> dict[str, float]:
+    """Median seconds of all the dense products (``floor``) and of their cores (``floor_core``).
+
+    The operands are built once, outside the timing; each timed run is the
+    products alone, one after the other (after one warm-up run).
+    """
+    out = {}
+    for name, fn in floor_calls(products, seed).items():
+        fn()
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t0)
+        out[name] = statistics.median(times)
+    return out
