@@ -96,7 +96,7 @@ def charge(
     """
     n, b0 = seg.stop - seg.start, seg.bias
     if b0 == 0 and not seg.spiking_on:
-        return np.zeros(v.shape, v.dtype), v
+        return _zeros(v), v
     b_all = params.per_neuron(b0, v.size)  # per-neuron scales: c·b and c·v_th per neuron
     end = v + n * b_all
     if seg.spiking_on:
@@ -128,7 +128,13 @@ def charge(
         step += seg.start - 1
         step[step >= seg.stop] = -1
         first[idle] = step
-    return np.zeros(v.shape, v.dtype), end
+    return _zeros(v), end
+
+
+def _zeros(v: np.ndarray) -> np.ndarray:
+    """A read-only zero current of ``v``'s shape: one element, broadcast (span solvers only
+    read ``u``; writing a fresh 4 MB of zeros per charging span was a tenth of the span)."""
+    return np.broadcast_to(np.zeros(1, v.dtype), v.shape)
 
 
 def silent(
