@@ -87,7 +87,14 @@ class LatencyCode(FrozenModel):
         lo, hi = self.x_min, self.x_max
         if self.kind == "log":
             x, lo, hi = np.log(x), np.log(lo), np.log(hi)
-        return self.t_min + (hi - x) / (hi - lo) * (self.t_max - self.t_min)
+        if not isinstance(x, np.ndarray) or x.ndim == 0:
+            return self.t_min + (hi - x) / (hi - lo) * (self.t_max - self.t_min)
+        # the same operations in place (x is a new array here): no temporaries per frame
+        np.subtract(hi, x, out=x)
+        x /= hi - lo
+        x *= self.t_max - self.t_min
+        x += self.t_min
+        return x
 
     def spike_steps(self, x: np.ndarray) -> np.ndarray:
         """Integer spike steps; ``t_max`` means no spike inside the window.
@@ -99,7 +106,8 @@ class LatencyCode(FrozenModel):
         t = self.spike_times(x)
         if self.rounding == "dither":
             t = t + dither_offsets(t.shape[-1] if t.ndim else 1).reshape(t.shape[-1:])
-        steps = np.rint(t) if self.rounding == "nearest" else np.floor(t)
+        out = t if isinstance(t, np.ndarray) and t.ndim else None
+        steps = np.rint(t, out=out) if self.rounding == "nearest" else np.floor(t, out=out)
         return steps.astype(np.int64)
 
     def value_of(self, steps: np.ndarray) -> np.ndarray:
