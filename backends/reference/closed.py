@@ -133,10 +133,12 @@ def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
     if fired.first is None:
         flat, step = fired.events()
         return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])
-    per_source = synapses_per_source(dl, k)
     arriving = fired.arriving(delay, fired.n_steps)
-    if per_source.size and (per_source == per_source[0]).all():  # a uniform fan-out (dense W)
-        return int(np.count_nonzero(arriving)) * int(per_source[0])
+    groups = getattr(dl, "source_synapse_groups", None)  # matrix deliveries: few fan-outs
+    if groups is not None and groups[k] is not None:
+        rows = arriving.reshape(-1, dl.src_size)
+        return sum(count * int(np.count_nonzero(rows & mask)) for count, mask in groups[k])
+    per_source = synapses_per_source(dl, k)
     arriving = arriving.reshape(-1, per_source.size)
     return int(np.sum(arriving @ per_source))  # bool @ int64: exact, no masked reduction
 

@@ -51,6 +51,9 @@ def _worth_factoring(w, integer: bool) -> SignedFactor | None:
     return factor if factor.saving <= 0.5 else None
 
 
+#: Distinct per-source synapse counts up to which synaptic events are counted by groups.
+MAX_FANOUT_GROUPS = 8
+
 @dataclass(frozen=True, eq=False)
 class MatrixDelivery:
     """The delivery plan of one :class:`~compiler.snn.MatrixProjection`.
@@ -465,6 +468,23 @@ class MatrixDelivery:
     def synapses_per_source(self, k: int) -> np.ndarray:
         """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""
         return self.source_synapses[k]
+
+    @cached_property
+    def source_synapse_groups(self) -> tuple[tuple[tuple[int, np.ndarray], ...] | None, ...]:
+        """Per delay class, the sources grouped by their synapse count: ``(count, mask)``
+        for each non-zero count, or None past :data:`MAX_FANOUT_GROUPS` distinct counts.
+
+        A dense matrix reaches few distinct counts (all of ``n_out``, fewer for a row
+        with zeros), so the synaptic events of a spike mask are ``Σ count ·
+        popcount(mask ∧ group)`` — bool passes instead of a bool @ int64 product.
+        """
+        out = []
+        for per_source in self.source_synapses:
+            counts = np.unique(per_source)
+            counts = counts[counts != 0]
+            out.append(None if counts.size > MAX_FANOUT_GROUPS else
+                       tuple((int(c), per_source == c) for c in counts))
+        return tuple(out)
 
 
 def _target_index(
