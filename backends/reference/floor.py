@@ -31,14 +31,12 @@ Examples
 ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
 >>> [(p.id, p.shape) for p in floor_products([build_plan(net)])]
 [('w', (3, 2, 4))]
->>> time_floor(floor_products([build_plan(net)]), repeats=1)["floor"] >= 0.0
-True
+>>> sorted(floor_calls(floor_products([build_plan(net)])))  # time them with compiler.bench
+['floor', 'floor_core']
 """
 
 from __future__ import annotations
 
-import statistics
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -48,7 +46,7 @@ import scipy.sparse as sp
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
 
-__all__ = ["FloorProduct", "floor_calls", "floor_products", "time_floor"]
+__all__ = ["FloorProduct", "floor_calls", "floor_products"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,8 +103,7 @@ def floor_calls(products: list[FloorProduct], seed: int = 0) -> dict[str, Callab
     """``{"floor": run, "floor_core": run}``: each call does all the dense products (or cores).
 
     The operands are built once, here; a call is the products alone, one after the
-    other (what :func:`time_floor` times, and what ``radarsnn bench`` interleaves with
-    the closed form's runs).
+    other (what ``radarsnn bench`` times, in turn with the closed form's runs).
     """
     dense = [(_features(p.rows, p.weights.shape[0], p.n_steps, p.weights.dtype, seed + i),
               p.weights) for i, p in enumerate(products)]
@@ -122,20 +119,3 @@ def floor_calls(products: list[FloorProduct], seed: int = 0) -> dict[str, Callab
 
     return {"floor": run(dense), "floor_core": run(cores)}
 
-
-def time_floor(products: list[FloorProduct], repeats: int = 5, seed: int = 0) -> dict[str, float]:
-    """Median seconds of all the dense products (``floor``) and of their cores (``floor_core``).
-
-    The operands are built once, outside the timing; each timed run is the
-    products alone, one after the other (after one warm-up run).
-    """
-    out = {}
-    for name, fn in floor_calls(products, seed).items():
-        fn()
-        times = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t0)
-        out[name] = statistics.median(times)
-    return out
