@@ -184,6 +184,11 @@ class TrainCurrents:
         Frames in the batch, steps per frame.
     block_bytes : int
         Cap on one block's gathered rows (a block holds at least one step).
+    paired : bool
+        Where the weights' columns pair as ``(y, −y)``
+        (:attr:`MatrixDelivery.paired_halves`), gather and sum the even halves only;
+        :meth:`at` then returns those halves, for :attr:`add_rows` (the delivery's
+        ``add_paired_rows``) to add — the same bits in the target as the full rows.
 
     Examples
     --------
@@ -200,8 +205,13 @@ class TrainCurrents:
 
     def __init__(self, delivery: MatrixDelivery, k: int, d: int, flat: np.ndarray,
                  steps: np.ndarray, n_frames: int, n_steps: int,
-                 block_bytes: int = TRAIN_BLOCK_BYTES) -> None:
+                 block_bytes: int = TRAIN_BLOCK_BYTES, paired: bool = False) -> None:
         self.delivery, self.k = delivery, k
+        half = delivery.paired_halves[k] if paired else None
+        #: The gathered table: the weights, or their even half (``paired``).
+        self.table = delivery.weights[k] if half is None else half
+        #: ``add_rows(rows, currents, out)`` for what :meth:`at` returns.
+        self.add_rows = delivery.add_rows if half is None else delivery.add_paired_rows
         per_step = n_frames * delivery.n_reps
         keep = steps + d < n_steps
         rows, cols = delivery.event_rows(flat[keep], n_frames)
@@ -219,7 +229,7 @@ class TrainCurrents:
         event_bounds = np.searchsorted(rows // per_step, np.arange(n_steps + 1))
         dtype = np.int64 if delivery.integer else np.float64
         block_starts = step_blocks(
-            event_bounds, max(1, block_bytes // (delivery.n_out * np.dtype(dtype).itemsize)))
+            event_bounds, max(1, block_bytes // (self.table.shape[1] * np.dtype(dtype).itemsize)))
         n_blocks = len(block_starts)
         self._block_of_step = np.repeat(np.arange(n_blocks),
                                         np.diff(np.append(block_starts, n_steps)))
@@ -248,7 +258,7 @@ class TrainCurrents:
         self._owner_span = np.stack([starts[owner], length], axis=1)
         per_block = np.diff(event_bounds[np.append(block_starts, n_steps)])
         most = int(per_block.max()) if n_blocks else 0
-        self._workspace = np.empty((most, delivery.n_out), dtype)  # reused: no page faults
+        self._workspace = np.empty((most, self.table.shape[1]), dtype)  # reused: no faults
         self._block, self._sums = -1, self._workspace
 
     def at(self, t: int) -> tuple[np.ndarray, np.ndarray] | None:
@@ -264,7 +274,7 @@ class TrainCurrents:
 
     def _compute(self, block: int) -> None:
         """The currents of every run of ``block``: heads plus level-summed tails."""
-        table = self.delivery.weights[self.k]
+        table = self.table
         r0, r1 = self._block_runs[block], self._block_runs[block + 1]
         sums = np.take(table, self._heads[r0:r1], axis=0, out=self._workspace[:r1 - r0])
         e0, e1 = self._block_entries[block], self._block_entries[block + 1]

@@ -139,7 +139,7 @@ def run_step(
                         if f.ahead is not None:
                             rows = f.ahead.at(t)
                             if rows is not None:
-                                arrivals.append((f.delivery.add_rows, *rows))
+                                arrivals.append((f.ahead.add_rows, *rows))
                         elif t >= f.delay:
                             ev = f.ring[(t - f.delay) % f.history]
                             if ev.size:
@@ -197,7 +197,8 @@ def _feed(plan: SimPlan, trains: dict[str, Train], ring: dict, dl: Delivery, k: 
     ahead = None
     if (train is not None and train.at_most_once
             and TRAIN_CURRENTS.get(type(dl), lambda _: False)(dl)):
-        ahead = TrainCurrents(dl, k, d, *train.all_events(), n_frames, plan.network.n_steps)
+        ahead = TrainCurrents(dl, k, d, *train.all_events(), n_frames, plan.network.n_steps,
+                              paired=True)
     return _Feed(dl, k, d, ring[dl.source], plan.history[dl.source], ahead)
 
 
