@@ -168,3 +168,36 @@ def test_not_gated_falls_back_to_the_driven_path(cut, kernel) -> None:
     x = {"x": np.array([0.9, 0.5, 0.8, 0.2, 0.7])}
     np.testing.assert_array_equal(simulate(net, x, mode="step").first_spike_steps["det"],
                                   simulate(net, x, mode="closed").first_spike_steps["det"])
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_frames=st.integers(1, 3))
+def test_one_source_current_equals_the_sparse_product(seed: int, n_frames: int) -> None:
+    """The gate's direct scatter: the bits of ``MatrixDelivery.current`` (±0 included)."""
+    from backends.reference.gate import _one_source_current
+    from backends.reference.matrix import MatrixDelivery
+
+    rng = np.random.default_rng(seed)
+    n_in, n_out = int(rng.integers(1, 6)), int(rng.integers(1, 7))
+    w = np.zeros((n_in, n_out))
+    owner = rng.integers(-1, n_in, size=n_out)  # each target: one source or none
+    w[owner[owner >= 0], np.flatnonzero(owner >= 0)] = rng.normal(size=int((owner >= 0).sum()))
+    proj = MatrixProjection(id="c", source="a", target="b", contract=("i",), produce=("o",),
+                            weights=w, delays=np.full(w.shape, 2))
+    src = Population(id="a", shape={"r": 2, "i": n_in}, source=True)
+    dl = MatrixDelivery.build(proj, src, Population(id="b", shape={"o": n_out, "r": 2}))
+    n = n_frames * src.size
+    flat = np.sort(rng.choice(n, size=int(rng.integers(0, n + 1)), replace=False))
+    values = rng.integers(-2, 5, size=flat.size) * 1.0
+    values[values == 0] = rng.choice([0.0, -0.0])
+    got = _one_source_current(dl, flat, values, n_frames)
+    ref = dl.current(0, flat, n_frames, values=values)
+    assert got is not None and got.shape == ref.shape
+    assert np.ascontiguousarray(got).tobytes() == np.ascontiguousarray(ref).tobytes()
+    if n_in > 1 and n_out:  # a target with two sources: not this path
+        w2 = w.copy()
+        w2[:2, 0] = 1.0
+        proj2 = MatrixProjection(id="c", source="a", target="b", contract=("i",),
+                                 produce=("o",), weights=w2, delays=np.full(w.shape, 2))
+        dl2 = MatrixDelivery.build(proj2, src, Population(id="b", shape={"o": n_out, "r": 2}))
+        assert _one_source_current(dl2, flat, values, n_frames) is None

@@ -113,6 +113,27 @@ def _single(flat: np.ndarray, n: int) -> bool:
     return not flat.size or int(np.bincount(flat, minlength=n).max()) <= 1
 
 
+def _one_source_current(dl: MatrixDelivery, flat: np.ndarray, values: np.ndarray,
+                        n_frames: int) -> np.ndarray | None:
+    """``dl.current(0, flat, n_frames, values)`` for a CSR that reaches each target from at
+    most one source, events of distinct sources (:func:`_single`); None for another matrix.
+
+    Every target entry is then one product ``value · w`` added to ``+0`` — what the
+    one-hot sparse product computes, in any order — so the stored entries of each
+    event's row are scattered directly, no sparse product.
+    """
+    w = dl.weights[0]
+    if not sp.isspmatrix_csr(w) or (w.nnz and int(np.bincount(w.indices).max()) > 1):
+        return None
+    rows, cols = dl.event_rows(flat, n_frames)
+    start = w.indptr[cols]
+    n = w.indptr[cols + 1] - start
+    pos = np.repeat(start - (np.cumsum(n) - n), n) + np.arange(int(n.sum()))
+    block = np.zeros(n_frames * dl.n_reps * dl.n_out, w.dtype)
+    block[np.repeat(rows, n) * dl.n_out + w.indices[pos]] += np.repeat(values, n) * w.data[pos]
+    return block.reshape(n_frames, *dl.block_shape).transpose(0, *(1 + a for a in dl.to_target))
+
+
 def solve_gated(
     plan: SimPlan, pid: str, gates: GateInputs, seg: PhaseSpan, params: StepParams,
     v: np.ndarray, first: np.ndarray, spikes: dict, n_frames: int, need_u: bool
@@ -153,8 +174,13 @@ def solve_gated(
     flat, arrive = flat[keep], arrive[keep]
     if not _single(flat, n_frames * dl.src_size):
         return None
-    w_gate = dl.current(0, flat, n_frames, values=np.ones(flat.size, dtype)).reshape(-1)
-    w_arrive = dl.current(0, flat, n_frames, values=arrive.astype(dtype)).reshape(-1)
+    ones, steps = np.ones(flat.size, dtype), arrive.astype(dtype)
+    w_gate = _one_source_current(dl, flat, ones, n_frames)
+    if w_gate is None:
+        w_gate, w_arrive = (dl.current(0, flat, n_frames, values=x) for x in (ones, steps))
+    else:
+        w_arrive = _one_source_current(dl, flat, steps, n_frames)
+    w_gate, w_arrive = w_gate.reshape(-1), w_arrive.reshape(-1)
     open_ = w_gate > 0
     when = np.full(w_gate.size, -1, np.int64)
     when[open_] = np.rint(w_arrive[open_] / w_gate[open_]).astype(np.int64)
