@@ -11,9 +11,9 @@ computed from figures of the same run, never across runs.
 
 The *floor* (:mod:`backends.reference.floor`) is the dense matrix products the
 closed form must apply — the same shared matrices, as plain numpy products —
-timed in the same run, each of its runs in turn with one of the closed form's (so a
-drift of the host's speed moves both alike): ``closed_over_floor`` says what the rest of the closed
-form (encoding, the analytic crossings, the CFAR, decoding) costs on top.  The
+timed in the same run, each of its runs in turn with one of the closed form's (a
+drift of the host's speed moves both alike): ``closed_over_floor`` says what the rest
+of the closed form (encoding, the analytic crossings, the CFAR, decoding) costs on top.  The
 load average (1, 5, 15 min) is read before and after the timings.
 
 Examples
@@ -38,13 +38,7 @@ __all__ = ["BenchReport", "chain_inputs", "interleaved_medians", "median_s", "ru
 
 def median_s(fn: Callable[[], object], repeats: int = 5) -> float:
     """The median wall time of ``repeats`` calls of ``fn`` (after one warm-up call)."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+    return interleaved_medians({"fn": fn}, repeats)["fn"]
 
 
 def interleaved_medians(fns: dict[str, Callable[[], object]], repeats: int = 5) -> dict[str, float]:

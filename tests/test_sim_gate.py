@@ -174,7 +174,7 @@ def test_not_gated_falls_back_to_the_driven_path(cut, kernel) -> None:
 @given(seed=st.integers(0, 2**32 - 1), n_frames=st.integers(1, 3))
 def test_one_source_current_equals_the_sparse_product(seed: int, n_frames: int) -> None:
     """The gate's direct scatter: the bits of ``MatrixDelivery.current`` (±0 included)."""
-    from backends.reference.gate import _one_source_current
+    from backends.reference.gate import _one_source_currents
     from backends.reference.matrix import MatrixDelivery
 
     rng = np.random.default_rng(seed)
@@ -190,14 +190,16 @@ def test_one_source_current_equals_the_sparse_product(seed: int, n_frames: int) 
     flat = np.sort(rng.choice(n, size=int(rng.integers(0, n + 1)), replace=False))
     values = rng.integers(-2, 5, size=flat.size) * 1.0
     values[values == 0] = rng.choice([0.0, -0.0])
-    got = _one_source_current(dl, flat, values, n_frames)
-    ref = dl.current(0, flat, n_frames, values=values)
-    assert got is not None and got.shape == ref.shape
-    assert np.ascontiguousarray(got).tobytes() == np.ascontiguousarray(ref).tobytes()
+    got = _one_source_currents(dl, flat, [values, np.ones(flat.size)], n_frames)
+    assert got is not None
+    for x, current in zip([values, np.ones(flat.size)], got, strict=True):
+        ref = dl.current(0, flat, n_frames, values=x)
+        assert current.shape == ref.shape
+        assert np.ascontiguousarray(current).tobytes() == np.ascontiguousarray(ref).tobytes()
     if n_in > 1 and n_out:  # a target with two sources: not this path
         w2 = w.copy()
         w2[:2, 0] = 1.0
         proj2 = MatrixProjection(id="c", source="a", target="b", contract=("i",),
                                  produce=("o",), weights=w2, delays=np.full(w.shape, 2))
         dl2 = MatrixDelivery.build(proj2, src, Population(id="b", shape={"o": n_out, "r": 2}))
-        assert _one_source_current(dl2, flat, values, n_frames) is None
+        assert _one_source_currents(dl2, flat, [values], n_frames) is None

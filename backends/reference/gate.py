@@ -113,14 +113,15 @@ def _single(flat: np.ndarray, n: int) -> bool:
     return not flat.size or int(np.bincount(flat, minlength=n).max()) <= 1
 
 
-def _one_source_current(dl: MatrixDelivery, flat: np.ndarray, values: np.ndarray,
-                        n_frames: int) -> np.ndarray | None:
-    """``dl.current(0, flat, n_frames, values)`` for a CSR that reaches each target from at
-    most one source, events of distinct sources (:func:`_single`); None for another matrix.
+def _one_source_currents(dl: MatrixDelivery, flat: np.ndarray, values: Sequence[np.ndarray],
+                         n_frames: int) -> list[np.ndarray] | None:
+    """``dl.current(0, flat, n_frames, values=x)`` for each ``x`` of ``values``, for a CSR
+    that reaches each target from at most one source and events of distinct sources
+    (:func:`_single`); None for another matrix.
 
-    Every target entry is then one product ``value · w`` added to ``+0`` — what the
+    Every target entry is then one product ``x · w`` added to ``+0`` — what the
     one-hot sparse product computes, in any order — so the stored entries of each
-    event's row are scattered directly, no sparse product.
+    event's row are found once and each ``x`` scattered directly, no sparse product.
     """
     w = dl.weights[0]
     if not sp.isspmatrix_csr(w) or (w.nnz and int(np.bincount(w.indices).max()) > 1):
@@ -129,9 +130,14 @@ def _one_source_current(dl: MatrixDelivery, flat: np.ndarray, values: np.ndarray
     start = w.indptr[cols]
     n = w.indptr[cols + 1] - start
     pos = np.repeat(start - (np.cumsum(n) - n), n) + np.arange(int(n.sum()))
-    block = np.zeros(n_frames * dl.n_reps * dl.n_out, w.dtype)
-    block[np.repeat(rows, n) * dl.n_out + w.indices[pos]] += np.repeat(values, n) * w.data[pos]
-    return block.reshape(n_frames, *dl.block_shape).transpose(0, *(1 + a for a in dl.to_target))
+    entry, weight = np.repeat(rows, n) * dl.n_out + w.indices[pos], w.data[pos]
+    out = []
+    for x in values:
+        block = np.zeros(n_frames * dl.n_reps * dl.n_out, w.dtype)
+        block[entry] += np.repeat(x, n) * weight
+        out.append(block.reshape(n_frames, *dl.block_shape).transpose(
+            0, *(1 + a for a in dl.to_target)))
+    return out
 
 
 def solve_gated(
@@ -174,13 +180,10 @@ def solve_gated(
     flat, arrive = flat[keep], arrive[keep]
     if not _single(flat, n_frames * dl.src_size):
         return None
-    ones, steps = np.ones(flat.size, dtype), arrive.astype(dtype)
-    w_gate = _one_source_current(dl, flat, ones, n_frames)
-    if w_gate is None:
-        w_gate, w_arrive = (dl.current(0, flat, n_frames, values=x) for x in (ones, steps))
-    else:
-        w_arrive = _one_source_current(dl, flat, steps, n_frames)
-    w_gate, w_arrive = w_gate.reshape(-1), w_arrive.reshape(-1)
+    values = (np.ones(flat.size, dtype), arrive.astype(dtype))
+    currents = _one_source_currents(dl, flat, values, n_frames) or [
+        dl.current(0, flat, n_frames, values=x) for x in values]
+    w_gate, w_arrive = (c.reshape(-1) for c in currents)
     open_ = w_gate > 0
     when = np.full(w_gate.size, -1, np.int64)
     when[open_] = np.rint(w_arrive[open_] / w_gate[open_]).astype(np.int64)

@@ -54,6 +54,7 @@ def _worth_factoring(w, integer: bool) -> SignedFactor | None:
 #: Distinct per-source synapse counts up to which synaptic events are counted by groups.
 MAX_FANOUT_GROUPS = 8
 
+
 @dataclass(frozen=True, eq=False)
 class MatrixDelivery:
     """The delivery plan of one :class:`~compiler.snn.MatrixProjection`.
