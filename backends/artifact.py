@@ -70,7 +70,6 @@ from pydantic import ValidationError
 from backends.artifact_codec import network_from_manifest, population_entry, projection_entry
 from backends.artifact_io import (
     ARRAYS_FILE,
-    ARTIFACT_ENTRIES,
     MANIFEST_FILE,
     MAX_ARRAYS_BYTES,
     finite_json,
@@ -79,6 +78,7 @@ from backends.artifact_io import (
     read_bytes,
     read_npz,
     render_json,
+    saved_entries,
     sha256_hex,
 )
 from backends.atomic import replace_directory, write_file
@@ -213,7 +213,7 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
     _, files = network_files(network, extra=extra, kinds=kinds)
     folder = Path(directory)
     try:
-        replace_directory(folder, lambda tmp: write_files(tmp, files), owned=ARTIFACT_ENTRIES)
+        replace_directory(folder, lambda tmp: write_files(tmp, files), owned=saved_entries)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot write the artifact to {folder}: {exc}") from exc
     return folder

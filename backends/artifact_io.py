@@ -31,6 +31,7 @@ from ir.errors import ArtifactError
 __all__ = [
     "ARRAYS_FILE",
     "ARTIFACT_ENTRIES",
+    "saved_entries",
     "MANIFEST_FILE",
     "MAX_ARRAYS_BYTES",
     "MAX_MANIFEST_BYTES",
@@ -49,10 +50,9 @@ __all__ = [
 MANIFEST_FILE = "manifest.json"
 ARRAYS_FILE = "arrays.npz"
 
-#: Every entry an artifact directory of either kind holds (network: the two files above;
-#: program: ``program.json``, ``report.md``, ``networks/``); saving replaces only these.
-ARTIFACT_ENTRIES = frozenset({MANIFEST_FILE, ARRAYS_FILE, "program.json", "report.md",
-                              "networks"})
+#: The files at the top of an artifact directory of either kind (network: the two files
+#: above; program: ``program.json``, ``report.md``, and ``networks/<k>/`` networks).
+ARTIFACT_ENTRIES = frozenset({MANIFEST_FILE, ARRAYS_FILE, "program.json", "report.md"})
 #: Largest manifest (``manifest.json``, ``program.json``) read: 64 MiB.
 MAX_MANIFEST_BYTES = 64 << 20
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
@@ -226,6 +226,38 @@ def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
             info.create_system, info.external_attr = 3, 0o644 << 16
             zf.writestr(info, npy.getvalue())
     return buffer.getvalue()
+
+
+def _network_refs(folder: Path) -> list[str]:
+    """The ``networks/<k>`` folders the ``program.json`` of ``folder`` refers to (none if it
+    cannot be read)."""
+    try:
+        body = json.loads(read_bytes(folder / "program.json"))
+        refs = [seg["network"]["path"] for seg in body["segments"] if seg["kind"] == "spiking"]
+    except (ArtifactError, ValueError, TypeError, KeyError, RecursionError):
+        return []
+    return [r for r in refs if isinstance(r, str) and r.startswith("networks/")
+            and r[len("networks/"):].isdecimal() and r[len("networks/"):].isascii()]
+
+
+def saved_entries(folder: Path) -> set[str]:
+    """What a save wrote into the artifact directory ``folder``: all that replacing it deletes.
+
+    The top files of either kind (and the ``NAME.tmp`` an older radarsnn left beside
+    them) and, for a program, each ``networks/<k>/`` its ``program.json`` refers to
+    with that network's two files.  Anything else (a user's file, even
+    ``networks/README.txt`` or ``networks/0/calib.npy``) is not the artifact's.
+
+    Examples
+    --------
+    >>> sorted(saved_entries(Path("/nonexistent")))  # doctest: +NORMALIZE_WHITESPACE
+    ['arrays.npz', 'arrays.npz.tmp', 'manifest.json', 'manifest.json.tmp', 'program.json',
+     'program.json.tmp', 'report.md', 'report.md.tmp']
+    """
+    entries = set(ARTIFACT_ENTRIES)
+    for ref in _network_refs(Path(folder)):
+        entries |= {"networks", ref, f"{ref}/{MANIFEST_FILE}", f"{ref}/{ARRAYS_FILE}"}
+    return entries | {f"{e}.tmp" for e in entries if "." in e.rsplit("/", 1)[-1]}
 
 
 def read_bytes(path: Path, *, limit: int = MAX_MANIFEST_BYTES) -> bytes:

@@ -21,8 +21,10 @@ Examples
 >>> import tempfile
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     out = Path(tmp) / "art"
-...     _ = replace_directory(out, lambda d: write_file(d / "a.txt", b"old"), owned={"a.txt"})
-...     _ = replace_directory(out, lambda d: write_file(d / "b.txt", b"new"), owned={"a.txt"})
+...     _ = replace_directory(out, lambda d: write_file(d / "a.txt", b"old"),
+...                           owned=lambda d: {"a.txt"})
+...     _ = replace_directory(out, lambda d: write_file(d / "b.txt", b"new"),
+...                           owned=lambda d: {"a.txt"})
 ...     sorted(p.name for p in Path(tmp).iterdir()), (out / "b.txt").read_bytes()
 (['art'], b'new')
 """
@@ -34,6 +36,7 @@ import errno
 import os
 import secrets
 import shutil
+import stat
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TypeVar
@@ -201,7 +204,10 @@ def _sync_tree(root: Path) -> None:
     """``fsync`` every file and directory below ``root`` (files first, then their folder)."""
     for folder, _, files in os.walk(root, topdown=False):
         for name in files:
-            fd = os.open(os.path.join(folder, name), os.O_RDONLY)
+            path = os.path.join(folder, name)
+            if not stat.S_ISREG(os.lstat(path).st_mode):  # a link, a FIFO (open would block)
+                continue
+            fd = os.open(path, os.O_RDONLY)
             try:
                 os.fsync(fd)
             finally:
@@ -221,8 +227,29 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(b))
 
 
-def _check_target(target: Path, owned: Iterable[str], shown: object) -> bool:
-    """Whether ``target`` exists; refuse what replacing it would destroy (``shown``: its name)."""
+def _foreign(root: Path, owned: set[str]) -> list[str]:
+    """The relative paths below ``root`` that are not ``owned`` (an owned folder is entered).
+
+    A symbolic link is an entry of its own (never followed); a foreign folder is one
+    entry (what it holds is not listed).
+    """
+    foreign, todo = [], [""]
+    while todo:
+        rel = todo.pop()
+        with os.scandir(root / rel) as it:
+            for entry in it:
+                name = f"{rel}/{entry.name}" if rel else entry.name
+                if name not in owned:
+                    foreign.append(name)
+                elif entry.is_dir(follow_symlinks=False):
+                    todo.append(name)
+    return sorted(foreign)
+
+
+def _check_target(target: Path, owned: set[str] | None, shown: object,
+                  keep: bool) -> list[str]:
+    """The foreign entries of ``target`` (``owned``: None if it does not exist); refuse
+    what replacing it would destroy (``shown``: its name)."""
     try:
         cwd = Path.cwd().resolve()
     except OSError:  # the working directory was deleted
@@ -230,23 +257,43 @@ def _check_target(target: Path, owned: Iterable[str], shown: object) -> bool:
     if cwd is not None and (target == cwd or target in cwd.parents):
         raise ArtifactError(f"cannot replace {shown}: it is (or holds) the current working "
                             "directory; save into a sub-directory or change directory first")
-    if not os.path.lexists(target):
-        return False
-    if not target.is_dir():
-        raise ArtifactError(f"cannot save into {shown}: it exists and is not a directory")
-    allowed = set(owned)
-    foreign = sorted(p.name for p in target.iterdir() if p.name not in allowed
-                     and not p.name.endswith(".tmp"))
-    if foreign:
+    if owned is None:
+        return []
+    foreign = _foreign(target, owned)
+    if foreign and not keep:
         raise ArtifactError(
-            f"cannot replace {shown}: it holds {len(foreign)} entries that are not part of "
-            f"an artifact ({', '.join(map(repr, foreign[:5]))}); saving replaces the whole "
-            "directory, so save into an empty or new directory, or remove them first")
-    return True
+            f"cannot replace {shown}: it holds {len(foreign)} entries that an earlier save did "
+            f"not write ({', '.join(map(repr, foreign[:5]))}); saving replaces only what it "
+            "wrote, so save into an empty or new directory, or move them away first")
+    return foreign
+
+
+def _link_or_copy(src: str, dst: str) -> None:
+    """A hard link of ``src`` at ``dst`` (the same file: nothing is copied), else a copy."""
+    try:
+        os.link(src, dst, follow_symlinks=False)
+    except OSError:
+        shutil.copy2(src, dst, follow_symlinks=False)
+
+
+def _carry(old: Path, new: Path, foreign: list[str], shown: object) -> None:
+    """Put each ``foreign`` entry of the ``old`` tree at the same place in the ``new`` one."""
+    for rel in foreign:
+        src, dst = old / rel, new / rel
+        if os.path.lexists(dst):
+            raise ArtifactError(f"cannot replace {shown}: its entry {rel!r} was not written by an "
+                                "earlier save and the new one writes that name; move it away "
+                                "first")
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        if src.is_dir() and not src.is_symlink():
+            shutil.copytree(src, dst, symlinks=True, copy_function=_link_or_copy)
+        else:
+            _link_or_copy(str(src), str(dst))
 
 
 def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
-                      owned: Iterable[str]) -> T:
+                      owned: Callable[[Path], Iterable[str]], keep: bool = False,
+                      durable: bool = True) -> T:
     """Build a new directory with ``fill`` and put it in the place of ``target`` atomically.
 
     Parameters
@@ -257,9 +304,20 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
         ``fill(folder)`` writes the new tree into the empty ``folder`` (the
         temporary); its return value is returned.  Files written with
         :func:`write_file` or otherwise are all synced before the swap.
-    owned : iterable of str
-        The entry names an existing ``target`` may hold; anything else is refused
-        rather than deleted with the old tree.
+    owned : callable
+        ``owned(directory)`` gives the relative paths (``a``, ``a/b``; files and
+        folders) of what an earlier save wrote into the existing ``target``: all that
+        replacing it may delete.  A folder's content is looked at only when the
+        folder is owned.
+    keep : bool
+        What to do with the other (foreign) entries of ``target``: refuse to replace
+        it (False), or keep them, hard-linked (or copied) into the new tree at the
+        same place before the swap (True; one that the new tree also writes is
+        refused).
+    durable : bool
+        ``fsync`` every file and folder of the new tree before the swap, so it
+        survives a power cut (without it the swap is still atomic for readers and
+        against a killed process).
 
     Returns
     -------
@@ -269,13 +327,18 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
     Raises
     ------
     ArtifactError
-        ``target`` is a file, holds foreign entries, or is the working directory.
+        ``target`` is a file, holds foreign entries (unless ``keep``), or is the
+        working directory.
     OSError
         A file-system failure; the temporary is removed and ``target`` is unchanged.
     """
     shown = target
     target = Path(os.path.realpath(target))
-    exists = _check_target(target, owned, shown)
+    exists = os.path.lexists(target)
+    if exists and not target.is_dir():
+        raise ArtifactError(f"cannot save into {shown}: it exists and is not a directory")
+    mine = set(owned(target)) if exists else None
+    _check_target(target, mine, shown, keep)  # before the work: refuse early
     target.parent.mkdir(parents=True, exist_ok=True)
     for stale in stale_temporaries(target):
         _remove(stale)
@@ -283,7 +346,9 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
     os.mkdir(tmp)
     try:
         result = fill(tmp)
-        _sync_tree(tmp)
+        _carry(target, tmp, _check_target(target, mine, shown, keep), shown)  # as it is now
+        if durable:
+            _sync_tree(tmp)
         if not exists:
             os.rename(tmp, target)  # fails (ENOTEMPTY/EEXIST) if one appeared meanwhile
         elif not _exchange(tmp, target):
@@ -298,6 +363,7 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
     except BaseException:
         _remove(tmp)
         raise
-    _fsync_dir(target.parent)
-    _remove(tmp)  # the old tree (when there was one)
+    if durable:
+        _fsync_dir(target.parent)
+    _remove(tmp)  # the old tree (when there was one); what was kept lives on in the new one
     return result

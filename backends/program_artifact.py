@@ -39,7 +39,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from backends.artifact import load, network_files, read_manifest, write_files
-from backends.artifact_io import ARTIFACT_ENTRIES, plain_json, render_json
+from backends.artifact_io import plain_json, render_json, saved_entries
 from backends.atomic import replace_directory, write_file
 from backends.manifest import HASH_KEY, radarsnn_version, read_manifest_file, seal
 from backends.reference.program import check_program
@@ -125,7 +125,7 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
     folder = Path(directory)
     try:
         replace_directory(folder, lambda tmp: _write_program(program, tmp, extra),
-                          owned=ARTIFACT_ENTRIES)
+                          owned=saved_entries)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
         raise ArtifactError(f"cannot write the program artifact to {folder}: {exc}") from exc
     log.info("saved program %r (%d segment(s)) to %s", program.graph.name,

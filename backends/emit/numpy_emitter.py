@@ -20,19 +20,18 @@ and the target.  Equal input gives byte-identical files.
 
 from __future__ import annotations
 
-import json
 import os
-import shutil
 import sys
 from pathlib import Path
 
 from backends.artifact import load
-from backends.artifact_io import npz_bytes, write_atomic
+from backends.artifact_io import npz_bytes
 from backends.emit.names import slug
 from backends.emit.numpy_host import emit_host
 from backends.emit.numpy_loop import emit_network, import_from
 from backends.emit.package import PackageBuilder
 from backends.emit.render import Code, comment, ident, indent, join, lit, render, template
+from backends.emit.writer import write_package
 from backends.manifest import radarsnn_version
 from backends.program_artifact import is_program, load_program
 from backends.reference.guards import check_simulation
@@ -40,13 +39,9 @@ from backends.reference.plan import build_plan
 from backends.reference.units import normalized_inputs, unit_plan
 from compiler.program import CompiledProgram, Segment
 from compiler.snn.network import SpikingNetwork
-from ir.errors import ArtifactError, CompileError
+from ir.errors import CompileError
 
 __all__ = ["emit_numpy"]
-
-#: The marker file of a generated package (an existing directory without it is never cleared).
-NAMES_FILE = "names.json"
-
 
 def _as_program(source: object) -> tuple[CompiledProgram | None, list[SpikingNetwork]]:
     if isinstance(source, str | os.PathLike):
@@ -255,21 +250,6 @@ def _stage_file(pkg: PackageBuilder, module: str, header: Code) -> Code:
 
 
 def _write(folder: Path, files: dict[str, Code], names: dict, pkg: PackageBuilder) -> Path:
-    if folder.exists():
-        if not (folder / NAMES_FILE).is_file():
-            if any(folder.iterdir()):
-                raise ArtifactError(f"{folder}: exists and is not a generated package (no "
-                                    f"{NAMES_FILE}); choose another output directory or name")
-        else:
-            shutil.rmtree(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        for fname in sorted(files):
-            text = str(files[fname]).rstrip("\n") + "\n"
-            write_atomic(folder / fname, text.encode("utf-8"))
-        write_atomic(folder / "weights.npz", npz_bytes(dict(sorted(pkg.arrays.items()))))
-        write_atomic(folder / NAMES_FILE, (json.dumps(names, indent=1, sort_keys=True,
-                                                      ensure_ascii=True) + "\n").encode())
-    except OSError as exc:
-        raise ArtifactError(f"cannot write the generated package to {folder}: {exc}") from exc
-    return folder
+    data = {fname: (str(code).rstrip("\n") + "\n").encode("utf-8") for fname, code in files.items()}
+    data["weights.npz"] = npz_bytes(dict(sorted(pkg.arrays.items())))
+    return write_package(folder, data, names)
