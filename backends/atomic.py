@@ -37,13 +37,15 @@ import os
 import secrets
 import shutil
 import stat
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
 from ir.errors import ArtifactError
+from ir.model import short_repr
 
-__all__ = ["replace_directory", "stale_temporaries", "write_atomic", "write_file"]
+__all__ = ["check_output", "replace_directory", "stale_temporaries", "write_atomic",
+           "write_atomic_files", "write_file"]
 
 T = TypeVar("T")
 
@@ -159,6 +161,62 @@ def _remove(path: Path) -> None:
         _unlink(path)
 
 
+def check_output(path: str | os.PathLike, *, folder: bool = False) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, if a writer may create or replace a file there.
+
+    Parameters
+    ----------
+    path : str or path-like
+    folder : bool
+        The output is a folder (else a regular file).
+
+    Raises
+    ------
+    ArtifactError
+        An empty name, a NUL byte, a file name ending in ``/``, a name the system
+        refuses (too long, a file used as a folder), or an existing entry of another
+        kind: a device such as ``/dev/null``, a pipe, a folder for a file (a file for
+        a folder).  The message names the path and what to give instead.
+
+    Examples
+    --------
+    >>> check_output("out/x.npz")
+    PosixPath('out/x.npz')
+    >>> check_output("/dev/null")
+    Traceback (most recent call last):
+    ir.errors.ArtifactError: output '/dev/null' exists and is not a regular file (a character \
+device); give the path of a file to create or replace
+    """
+    text = os.fsdecode(os.fspath(path))
+    shown = short_repr(text)
+    kind = "folder" if folder else "file"
+    if not text.strip():
+        raise ArtifactError(f"output {shown} is empty; give the path of a {kind}")
+    if "\0" in text:
+        raise ArtifactError(f"output {shown} contains a NUL byte; give a path without one")
+    if not folder and text.endswith(("/", os.sep)):
+        raise ArtifactError(f"output {shown} ends with a path separator; give a file name")
+    try:
+        mode = os.stat(text).st_mode
+    except FileNotFoundError:
+        return Path(text)
+    except OSError as exc:  # a name too long, a file used as a folder, a loop of links
+        raise ArtifactError(f"output {shown} cannot be used ({exc.strerror}); give another "
+                            f"path of a {kind}") from None
+    if folder and not stat.S_ISDIR(mode):
+        raise ArtifactError(f"output {shown} exists and is not a folder; give the path of a "
+                            "folder to create or replace")
+    if not folder and not stat.S_ISREG(mode):
+        raise ArtifactError(f"output {shown} exists and is not a regular file "
+                            f"(a {_KINDS.get(stat.S_IFMT(mode), 'special file')}); give the "
+                            "path of a file to create or replace")
+    return Path(text)
+
+
+_KINDS = {stat.S_IFDIR: "folder", stat.S_IFCHR: "character device", stat.S_IFBLK: "block device",
+          stat.S_IFIFO: "pipe", stat.S_IFSOCK: "socket"}
+
+
 def write_atomic(path: Path, data: bytes, *, durable: bool = False) -> None:
     """Write ``data`` to a hidden temporary beside ``path``, then rename it over ``path``.
 
@@ -173,6 +231,8 @@ def write_atomic(path: Path, data: bytes, *, durable: bool = False) -> None:
 
     Raises
     ------
+    ArtifactError
+        ``path`` is no place for a file (:func:`check_output`: a device, a folder…).
     OSError
         If the file cannot be written (the caller wraps it); the temporary is
         removed and ``path`` keeps its previous content.
@@ -186,18 +246,44 @@ def write_atomic(path: Path, data: bytes, *, durable: bool = False) -> None:
     ...     [p.name for p in Path(tmp).iterdir()], (Path(tmp) / "f").read_bytes()
     (['f'], b'y')
     """
-    path = Path(path)
-    for stale in stale_temporaries(path):
-        _remove(stale)
-    tmp = _temp_name(path, ".tmp")
-    write_file(tmp, data, sync=durable)
+    write_atomic_files({path: data}, durable=durable)
+
+
+def write_atomic_files(files: Mapping[Path, bytes], *, durable: bool = False) -> None:
+    """:func:`write_atomic` for several files: each is renamed into place only once all are
+    written, so a full disk changes none of them.
+
+    Raises
+    ------
+    ArtifactError, OSError
+        As :func:`write_atomic`; every temporary is removed, no file is changed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     write_atomic_files({Path(tmp) / "a.nir": b"x", Path(tmp) / "a.json": b"{}"})
+    ...     sorted(p.name for p in Path(tmp).iterdir())
+    ['a.json', 'a.nir']
+    """
+    paths = {check_output(path): data for path, data in files.items()}
+    done: list[tuple[Path, Path]] = []
     try:
-        os.replace(tmp, path)
+        for path, data in paths.items():
+            for stale in stale_temporaries(path):
+                _remove(stale)
+            tmp = _temp_name(path, ".tmp")
+            write_file(tmp, data, sync=durable)
+            done.append((tmp, path))
+        for tmp, path in done:
+            os.replace(tmp, path)
     except BaseException:
-        _unlink(tmp)
+        for tmp, _ in done:
+            _unlink(tmp)
         raise
     if durable:
-        _fsync_dir(path.parent)
+        for folder in dict.fromkeys(path.parent for path in paths):
+            _fsync_dir(folder)
 
 
 def _sync_tree(root: Path) -> None:

@@ -45,6 +45,7 @@ Examples
 
 from __future__ import annotations
 
+import io
 import json
 from collections.abc import Iterable
 from pathlib import Path
@@ -52,6 +53,7 @@ from pathlib import Path
 import nir
 import numpy as np
 
+from backends.atomic import check_output, write_atomic_files
 from backends.brian2.synapses import dense_weights, expand_projection
 from backends.nir.neurons import bias_of, neuron_nodes, origin_node, scaled_bias
 from backends.nir.report import ExportReport
@@ -285,9 +287,19 @@ def _export(nets: list[SpikingNetwork], host: list[str], dt_s: float, max_weight
 
 
 def write_nir(graph: nir.NIRGraph, report: ExportReport, path: str | Path) -> ExportReport:
-    """Write ``graph`` to ``path`` (``nir.write``) and the report next to it as JSON.
+    """Write ``graph`` to ``path`` (``nir.write``) and the report next to it as JSON, atomically.
 
-    The report goes to ``<path without suffix>.report.json``; its ``path`` is set.
+    The report goes to ``<path without suffix>.report.json``; its ``path`` is set.  Both
+    files are written whole into hidden temporaries first and renamed into place only
+    then (:func:`backends.atomic.write_atomic_files`): a full disk or a killed process
+    leaves the previous pair (or nothing), never a truncated ``.nir``.
+
+    Raises
+    ------
+    ArtifactError
+        ``path`` (or its report's path) is no place for a file (a device such as
+        ``/dev/null``, a folder, a NUL byte), or a file cannot be written (naming
+        it; nothing is changed).
 
     Examples
     --------
@@ -298,8 +310,17 @@ def write_nir(graph: nir.NIRGraph, report: ExportReport, path: str | Path) -> Ex
     ...     sorted(p.name for p in pathlib.Path(d).iterdir())
     ['net.nir', 'net.report.json']
     """
-    path = Path(path)
-    nir.write(path, graph)
+    path = check_output(path)
+    report_path = check_output(path.with_suffix(".report.json"))
+    buffer = io.BytesIO()
+    nir.write(buffer, graph)  # in memory: h5py never writes to a disk that may be full
     report.path = str(path)
-    report.write(path.with_suffix(".report.json"))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic_files({path: buffer.getvalue(), report_path: report.to_bytes()},
+                           durable=True)
+    except OSError as exc:
+        raise ArtifactError(f"cannot write the NIR export to {path}: "
+                            f"{exc.strerror or exc} (nothing was written; free some space or "
+                            "give another path)") from exc
     return report

@@ -30,6 +30,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Literal
 
+from backends.atomic import write_atomic
+
 __all__ = ["ReportEntry", "ExportReport", "EntryKind"]
 
 EntryKind = Literal["exact", "lowered", "outside"]
@@ -104,10 +106,14 @@ class ExportReport:
         return {"path": self.path, "counts": counts,
                 "entries": [asdict(e) for e in self.entries], "nodes": dict(self.nodes)}
 
+    def to_bytes(self) -> bytes:
+        """The report as the JSON file :meth:`write` writes."""
+        return (json.dumps(self.to_dict(), indent=2) + "\n").encode()
+
     def write(self, path: str | Path) -> Path:
-        """Write the report as JSON to ``path``; returns it."""
+        """Write the report as JSON to ``path`` atomically (whole, or not at all); returns it."""
         path = Path(path)
-        path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        write_atomic(path, self.to_bytes())
         return path
 
     def summary(self) -> str:

@@ -68,16 +68,20 @@ def export_nir(args: argparse.Namespace):
         folder compiled for another ``--target``; ``--stage`` with a network artifact.
     ArtifactError
         No spiking network for the stages, a projection over the dense-weight limit,
-        or an unreadable artifact.
+        an unreadable artifact, an output path that is no place for a file (a device,
+        a folder, a NUL byte), or one that cannot be written (nothing is changed).
     CompileError
         A chain that does not compile (and the other errors of ``radarsnn compile``).
     """
     _require_nir()
     from backends import is_program, load
+    from backends.atomic import check_output
     from backends.nir import export_network, export_program, write_nir
     from compiler.cli.chain import _compile  # the compile of `radarsnn compile`/`report`
     from compiler.cli.notes import artifact_note
 
+    path = check_output(args.output)  # before any work: a device, a folder, a NUL byte
+    check_output(path.with_suffix(".report.json"))
     source = Path(args.chain)
     if source.is_dir():
         _chain_only(args)
@@ -99,8 +103,6 @@ def export_nir(args: argparse.Namespace):
     else:
         program, note = _compile(args, args.target or "loihi2")
         graph, report = export_program(program, stages=args.stage, dt_s=args.dt_s)
-    path = Path(args.output)
-    path.parent.mkdir(parents=True, exist_ok=True)
     write_nir(graph, report, path)
     return path, graph, report, note
 

@@ -23,7 +23,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from backends import is_program, load
+    from backends.atomic import check_output
 
+    path = None
+    if args.output is not None:  # before any work: a device (/dev/null), a folder, a NUL byte
+        given = str(check_output(args.output))
+        path = check_output(given if given.endswith(".npz") else f"{given}.npz")
     loaded = load(args.artifact)
     if is_program(args.artifact):
         ports = loaded.graph.input_ids()
@@ -35,10 +40,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     result = _simulate_frames(loaded, inputs, args, "reject" if policy == "reject" else "clip")
     if policy == "warn" and result.clipped:
         print(clipped_warning(result.clipped), file=sys.stderr)
-    if args.output:
+    if path is not None:
         from backends.artifact_io import npz_bytes
 
-        path = args.output if str(args.output).endswith(".npz") else f"{args.output}.npz"
         write_output(path, npz_bytes({k: np.asarray(v) for k, v in result.outputs.items()}),
                      "the outputs")
     if args.json:
