@@ -268,7 +268,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     if report is None:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
     if args.core_map:
-        report.save_core_map(args.core_map)
+        write_output(args.core_map, report.core_map_png(), "the core map")
     if args.format == "json" or args.json:
         print(report.to_json())
         if "synthetic noise" in note:  # stdout stays JSON; the caveat goes to stderr

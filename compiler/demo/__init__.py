@@ -21,6 +21,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from backends.atomic import check_output
+from compiler.cli.chain import write_output
 from compiler.demo.figures import rd_maps, spike_times
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
@@ -143,7 +145,7 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
         ``progress(stage, message)``.
     """
     report = DemoReport(seed=seed)
-    out = None if out_dir is None else Path(out_dir)
+    out = None if out_dir is None else check_output(out_dir, folder=True)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
     for name in presets or PRESETS:
@@ -157,13 +159,14 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
         if arrays.first_spikes:
             files.append(spike_times(out / f"spikes_{name}.png", name, arrays.first_spikes))
         if arrays.report is not None:
-            files.append(arrays.report.save_core_map(out / f"cores_{name}.png"))
+            cores = out / f"cores_{name}.png"
+            write_output(cores, arrays.report.core_map_png(), "the core map")
             md = out / f"report_{name}.md"
-            md.write_text(arrays.report.to_markdown(), encoding="utf-8")
-            files.append(md)
+            write_output(md, arrays.report.to_markdown().encode("utf-8"), "the report")
+            files += [cores, md]
         report.files += [str(f) for f in files]
     if out is not None:
         summary = out / "summary.md"
-        summary.write_text(report.to_markdown(), encoding="utf-8")
+        write_output(summary, report.to_markdown().encode("utf-8"), "the summary")
         report.files.append(str(summary))
     return report

@@ -16,10 +16,12 @@ map is :meth:`compiler.report.Report.save_core_map`.
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 
+from compiler.cli.chain import write_output
 from compiler.demo.matching import detection_peaks, match_peak
 
 __all__ = ["MARKERS", "rd_figure", "rd_maps", "spike_figure", "spike_times"]
@@ -156,11 +158,7 @@ def rd_figure(title: str, arrays, config, *, span_db: tuple[float, float] = SPAN
 
 def rd_maps(path: Path, title: str, arrays, config) -> Path:
     """Write :func:`rd_figure` as a PNG at ``path``; return ``path``."""
-    plt = _pyplot()
-    fig = rd_figure(title, arrays, config)
-    fig.savefig(path, dpi=DPI)
-    plt.close(fig)
-    return Path(path)
+    return write_png(path, rd_figure(title, arrays, config))
 
 
 def _block(steps: np.ndarray, max_neurons: int) -> tuple[int, np.ndarray]:
@@ -242,8 +240,13 @@ def spike_figure(title: str, first_spikes: dict[str, np.ndarray], max_neurons: i
 def spike_times(path: Path, title: str, first_spikes: dict[str, np.ndarray],
                 max_neurons: int = 512) -> Path:
     """Write :func:`spike_figure` as a PNG at ``path``; return ``path``."""
-    plt = _pyplot()
-    fig = spike_figure(title, first_spikes, max_neurons)
-    fig.savefig(path, dpi=DPI)
-    plt.close(fig)
+    return write_png(path, spike_figure(title, first_spikes, max_neurons))
+
+
+def write_png(path: Path, fig) -> Path:
+    """Write ``fig`` as a PNG at ``path`` atomically (whole, or the old file kept); close it."""
+    png = io.BytesIO()
+    fig.savefig(png, dpi=DPI, format="png")
+    _pyplot().close(fig)
+    write_output(path, png.getvalue(), "a figure")
     return Path(path)

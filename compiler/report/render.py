@@ -25,6 +25,7 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
 
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -124,8 +125,8 @@ class Report:
             lines += _chip_lines(d)
         return "\n".join(lines) + "\n"
 
-    def save_core_map(self, path: str | Path) -> Path:
-        """Draw the cores coloured by stage, filled to their utilisation, as a PNG.
+    def core_map_png(self) -> bytes:
+        """The cores coloured by stage, filled to their utilisation: a PNG file's bytes.
 
         See :mod:`compiler.report.core_map` (every stage on a core is drawn, a shared
         core split between its stages; the legend's colours are the patches').
@@ -135,9 +136,16 @@ class Report:
         from compiler.report.core_map import core_map_figure  # matplotlib: only when drawing
 
         fig = core_map_figure(self.data)
-        path = Path(path)
-        fig.savefig(path, dpi=100, bbox_inches="tight")
+        png = io.BytesIO()
+        fig.savefig(png, dpi=100, bbox_inches="tight", format="png")
         plt.close(fig)
+        return png.getvalue()
+
+    def save_core_map(self, path: str | Path) -> Path:
+        """Write :meth:`core_map_png` to ``path``; return it (``radarsnn report --core-map``
+        and the demo write it atomically instead)."""
+        path = Path(path)
+        path.write_bytes(self.core_map_png())
         return path
 
 

@@ -18,11 +18,14 @@ Examples
 
 from __future__ import annotations
 
+import io
+import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from compiler.cli.chain import write_output
 from compiler.sweep.spec import FigureSpec
 from ir.errors import CompileError
 
@@ -199,14 +202,16 @@ def draw_figures(figures: list[FigureSpec], rows: list[dict], out_dir: str | Pat
     rows : list of dict
         :func:`compiler.sweep.results.summarize` rows (incomplete or failed rows skipped).
     out_dir : str or Path
-        Folder of the PNG files (created), one ``<name or kind>.png`` per figure.
+        Folder of the PNG files (created), one ``<name or kind>.png`` per figure, each
+        written atomically (whole, or the previous one kept).
     names : dict, optional
         Metric key -> registered metric name (default: each key is its name).
 
     Raises
     ------
     CompileError
-        A figure names a metric the sweep does not have.
+        A figure names a metric the sweep does not have, or its file would be written
+        outside ``out_dir``.
     """
     import matplotlib
 
@@ -227,10 +232,29 @@ def draw_figures(figures: list[FigureSpec], rows: list[dict], out_dir: str | Pat
     }
     paths = []
     for fig in figures:
+        path = _inside(out, fig.file_name)
         f = drawers[fig.kind](fig)
         f.tight_layout()
-        path = out / f"{fig.name or fig.kind}.png"
-        f.savefig(path, dpi=110)
+        png = io.BytesIO()
+        f.savefig(png, dpi=110, format="png")
         plt.close(f)
+        write_output(path, png.getvalue(), f"figure {fig.file_name!r}")
         paths.append(path)
     return paths
+
+
+def _inside(folder: Path, name: str) -> Path:
+    """``folder/name``, refused unless it is a file directly in ``folder``.
+
+    Examples
+    --------
+    >>> _inside(Path("out"), "../x.png")
+    Traceback (most recent call last):
+    ir.errors.CompileError: figure file '../x.png' would be written outside out; give the \
+figure a plain `name` (no folder)
+    """
+    path = folder / name
+    if os.path.dirname(name) or os.path.isabs(name) or path.resolve().parent != folder.resolve():
+        raise CompileError(f"figure file {name!r} would be written outside {folder}; give the "
+                           "figure a plain `name` (no folder)")
+    return path

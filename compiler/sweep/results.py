@@ -21,10 +21,12 @@ Examples
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 from typing import Any
 
+from compiler.cli.chain import write_output
 from compiler.sweep.cost import finalize_cost
 from ir.errors import ArtifactError
 
@@ -56,7 +58,7 @@ def read_records(path: Path) -> list[dict[str, Any]]:
     text = path.read_text()
     if text and not text.endswith("\n"):
         keep = text[:text.rfind("\n") + 1]
-        path.write_text(keep)
+        write_output(path, keep.encode(), "the results")  # atomic: a kill keeps every record
         text = keep
     records = []
     for n, line in enumerate(text.splitlines(), 1):
@@ -132,15 +134,17 @@ def _flat(row: dict[str, Any]) -> dict[str, Any]:
 
 
 def write_summary(rows: list[dict[str, Any]], out_dir: Path) -> tuple[Path, Path]:
-    """Write ``summary.json`` (the rows) and ``summary.csv`` (flattened, one row a point)."""
+    """Write ``summary.json`` (the rows) and ``summary.csv`` (flattened, one row a point),
+    each atomically (whole, or the previous one kept)."""
     out_dir = Path(out_dir)
     js = out_dir / "summary.json"
-    js.write_text(json.dumps(rows, indent=1, sort_keys=True) + "\n")
+    write_output(js, (json.dumps(rows, indent=1, sort_keys=True) + "\n").encode(), "the summary")
     flat = [_flat(r) for r in rows]
     columns = list(dict.fromkeys(k for r in flat for k in r))
     path = out_dir / "summary.csv"
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=columns)
-        writer.writeheader()
-        writer.writerows(flat)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(flat)
+    write_output(path, text.getvalue().encode(), "the summary")
     return js, path

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from backends.atomic import check_output
 from compiler.sweep.executors import DaskExecutor, SyncExecutor
 from compiler.sweep.frames import folder_files, load_frames
 from compiler.sweep.metrics import NODE_OPS, MetricRegistry, default_metrics
@@ -211,13 +212,15 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
         An invalid spec, metric or input node.
     RadarConfigError
         A frame source that cannot give frames.
+    ArtifactError
+        ``out_dir`` exists and is not a folder (or is no valid path).
     """
     from tqdm import tqdm
 
     start = time.perf_counter()
     spec = spec if isinstance(spec, SweepSpec) else load_spec(spec)
     registry = metrics or default_metrics()
-    out = Path(out_dir)
+    out = check_output(out_dir, folder=True)  # not a file, a device, a NUL byte
     out.mkdir(parents=True, exist_ok=True)
     results = out / RESULTS_FILE
     plan = plan_cells(spec, registry)

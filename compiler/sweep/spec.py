@@ -29,12 +29,21 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, PositiveInt, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PositiveInt,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from ir.errors import CompileError
 
@@ -102,11 +111,24 @@ class MetricSpec(_Model):
         return self.label or self.name
 
 
+#: A figure's file name (``<name>.png`` in ``OUT/figures``): a plain name, never a path.
+FIGURE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
+
+
 class FigureSpec(_Model):
     """One figure of the sweep (a bare string in the file is its ``kind``).
 
     ``metric`` is ``KEY`` or ``KEY.FIELD`` of a metric (default: the first metric of the
-    kind's metric name, its main field); ``x`` a grid axis; ``cost`` a cost column.
+    kind's metric name, its main field); ``x`` a grid axis; ``cost`` a cost column;
+    ``name`` the file name (``<name>.png``, default the kind): letters, digits, ``_``,
+    ``-`` and ``.``, at most 100, no folder.
+
+    Examples
+    --------
+    >>> FigureSpec(kind="pareto", name="rmse_vs_cost").file_name
+    'rmse_vs_cost.png'
+    >>> [bool(FIGURE_NAME.fullmatch(n)) for n in ("fig7.a", "../../x", "/abs/y", ".hidden")]
+    [True, False, False, False]
     """
 
     kind: Literal["fig7", "sft_rmse", "weight_bits", "pareto"]
@@ -119,6 +141,20 @@ class FigureSpec(_Model):
     @classmethod
     def _from_name(cls, data: Any) -> Any:
         return {"kind": data} if isinstance(data, str) else data
+
+    @field_validator("name")
+    @classmethod
+    def _plain_name(cls, name: str | None) -> str | None:
+        if name is not None and not FIGURE_NAME.fullmatch(name):
+            raise ValueError("a figure name is a file name in OUT/figures, not a path: "
+                             "letters, digits, '_', '-' and '.' (first a letter or digit, at "
+                             "most 100), e.g. 'fig7_carrada'")
+        return name
+
+    @property
+    def file_name(self) -> str:
+        """``<name or kind>.png``."""
+        return f"{self.name or self.kind}.png"
 
 
 @dataclass(frozen=True)
@@ -177,6 +213,10 @@ class SweepSpec(_Model):
         labels = [m.key for m in self.metrics]
         if len(set(labels)) != len(labels):
             raise ValueError(f"metric labels {labels} repeat; give each a distinct `label`")
+        files = [f.file_name for f in self.figures]
+        if len(set(files)) != len(files):
+            raise ValueError(f"figure files {files} repeat (one would overwrite the other); "
+                             "give each figure a distinct `name`")
         return self
 
     # ------------------------------------------------------------------ expansion
