@@ -14,6 +14,9 @@ import builtins
 import errno
 import io
 import os
+import random
+import signal
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -117,7 +120,7 @@ def tree_bytes(root: Path) -> dict[str, bytes]:
             if p.is_file()}
 
 
-__all__ = ["DiskFull", "listing", "tree_bytes"]
+__all__ = ["DiskFull", "fault_chain", "kill_while_saving", "listing", "tree_bytes"]
 
 
 def fault_chain(name: str) -> tuple:
@@ -134,3 +137,68 @@ def fault_chain(name: str) -> tuple:
          "alpha": 1.5},
         {"id": "o", "op": "output", "input": "c"}]})
     return graph, {"a": np.linspace(-1.0, 1.0, 8)}
+
+
+def _slow_disk(delay_s: float) -> None:
+    """Make each file write of this (forked) process take ``delay_s / 8`` longer, as on a
+    slow disk.
+
+    On a RAM-backed ``/tmp`` writing costs almost nothing and a save's temporary lives
+    for a sliver of it, so random kills would rarely land while it exists.
+    """
+    import backends.atomic as atomic
+
+    write = atomic._write
+
+    def slow(fd, chunk):
+        time.sleep(delay_s / 8)
+        return write(fd, chunk)
+
+    atomic._write = slow
+
+
+def kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: int,
+                      seed: int) -> list[str]:
+    """Fork a child that saves ``versions`` in turn forever; SIGKILL it at random moments.
+
+    ``save_one(version, target)`` saves into ``target`` (a directory); ``check(target)``
+    names the state a kill left (it raises if that state is broken).  Returns the names.
+    """
+    import backends.atomic as atomic
+
+    rng = random.Random(seed)
+    target = tmp_path / "target"
+    save_one(versions[0], target)
+    start = time.perf_counter()
+    save_one(versions[1], target)
+    period = time.perf_counter() - start
+    seen, interrupted = [], 0
+    for _ in range(kills):
+        ready_r, ready_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: never returns into pytest
+            code = 0
+            try:
+                os.close(ready_r)
+                _slow_disk(period)
+                i = rng.randrange(2)
+                save_one(versions[i % 2], target)  # warm: a fresh fork may start slowly
+                os.write(ready_w, b"1")  # saving in a loop now
+                while True:
+                    i += 1
+                    save_one(versions[i % 2], target)
+            except BaseException:  # noqa: BLE001 - reported to the parent by the exit code
+                code = 3
+            finally:
+                os._exit(code)
+        os.close(ready_w)
+        os.read(ready_r, 1)  # kill only a child that saves in its loop
+        os.close(ready_r)
+        time.sleep(rng.uniform(0.0, 3 * period))
+        os.kill(pid, signal.SIGKILL)
+        _, status = os.waitpid(pid, 0)
+        assert os.WIFSIGNALED(status), f"the saving child failed (status {status})"
+        interrupted += bool(atomic.stale_temporaries(target))  # killed mid-save: temporary left
+        seen.append(check(target))
+    assert interrupted >= kills // 4, f"only {interrupted} of {kills} kills hit a save"
+    return seen

@@ -12,14 +12,11 @@ not name it, and elsewhere ``.tmp`` files.  Full disks are simulated by ``tests/
 from __future__ import annotations
 
 import os
-import random
-import signal
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from faults import fault_chain, listing, tree_bytes
+from faults import fault_chain, kill_while_saving, listing, tree_bytes
 
 from backends import load, load_program, save, save_program
 from backends.artifact import read_manifest
@@ -175,64 +172,6 @@ def test_stale_temporaries_of_dead_processes_are_removed_by_the_next_save(progra
     assert sorted(os.listdir(tmp_path)) == sorted(["art", "o.npz", live.name])
 
 
-def _slow_disk(delay_s: float) -> None:
-    """Make this (forked) process's directory syncs take ``delay_s`` longer, as on a slow disk.
-
-    On a RAM-backed ``/tmp`` a sync costs nothing and the temporary lives for a
-    sliver of each save, so random kills would rarely land while it exists.
-    """
-    import backends.atomic as atomic
-
-    sync = atomic._sync_tree
-
-    def slow(root: Path) -> None:
-        sync(root)
-        time.sleep(delay_s)
-
-    atomic._sync_tree = slow
-
-
-def _kill_while_saving(tmp_path: Path, versions: list, save_one, check, kills: int,
-                       seed: int) -> list[str]:
-    """Fork a child that saves ``versions`` in turn forever; SIGKILL it at random moments."""
-    rng = random.Random(seed)
-    target = tmp_path / "target"
-    save_one(versions[0], target)
-    start = time.perf_counter()
-    save_one(versions[1], target)
-    period = time.perf_counter() - start
-    seen, interrupted = [], 0
-    for _ in range(kills):
-        ready_r, ready_w = os.pipe()
-        pid = os.fork()
-        if pid == 0:  # the child: never returns into pytest
-            code = 0
-            try:
-                os.close(ready_r)
-                _slow_disk(period)
-                i = rng.randrange(2)
-                save_one(versions[i % 2], target)  # warm: a fresh fork may start slowly
-                os.write(ready_w, b"1")  # saving in a loop now
-                while True:
-                    i += 1
-                    save_one(versions[i % 2], target)
-            except BaseException:  # noqa: BLE001 - reported to the parent by the exit code
-                code = 3
-            finally:
-                os._exit(code)
-        os.close(ready_w)
-        os.read(ready_r, 1)  # kill only a child that saves in its loop
-        os.close(ready_r)
-        time.sleep(rng.uniform(0.0, 3 * period))
-        os.kill(pid, signal.SIGKILL)
-        _, status = os.waitpid(pid, 0)
-        assert os.WIFSIGNALED(status), f"the saving child failed (status {status})"
-        interrupted += bool(stale_temporaries(target))  # killed mid-save: its temporary stays
-        seen.append(check(target))
-    assert interrupted >= kills // 4, f"only {interrupted} of {kills} kills hit a save"
-    return seen
-
-
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="needs os.fork")
 def test_sigkill_while_saving_a_program_leaves_the_old_or_the_new_one(programs, tmp_path):
     two, one = programs
@@ -245,7 +184,7 @@ def test_sigkill_while_saving_a_program_leaves_the_old_or_the_new_one(programs, 
             str(i) for i in range(len(program.networks))]
         return digests[_digest(target)]
 
-    seen = _kill_while_saving(tmp_path, [two, one], save_program, check, kills=30, seed=10)
+    seen = kill_while_saving(tmp_path, [two, one], save_program, check, kills=30, seed=10)
     assert set(seen) <= {"v0", "v1"}
     save_program(one, tmp_path / "target")  # the next save removes what the kills left
     assert sorted(os.listdir(tmp_path)) == ["ref0", "ref1", "target"]
@@ -261,7 +200,7 @@ def test_sigkill_while_saving_a_network_leaves_the_old_or_the_new_one(programs, 
         load(target)  # complete and consistent, or this raises
         return digests[read_manifest(target)[HASH_KEY]]
 
-    seen = _kill_while_saving(tmp_path, nets, save, check, kills=12, seed=11)
+    seen = kill_while_saving(tmp_path, nets, save, check, kills=12, seed=11)
     assert set(seen) <= {"v0", "v1"}
     save(nets[0], tmp_path / "target")
     assert sorted(os.listdir(tmp_path)) == ["ref0", "ref1", "target"]

@@ -12,9 +12,10 @@ Examples
 --------
 >>> import tempfile
 >>> with tempfile.TemporaryDirectory() as tmp:
-...     pkg = write_package(Path(tmp) / "p", {"a.py": b"x = 1\\n"}, {})
+...     names = dict.fromkeys(("package", "chain", "target", "radarsnn_version", "stages"))
+...     pkg = write_package(Path(tmp) / "p", {"a.py": b"x = 1\\n"}, names)
 ...     _ = (pkg / "notes.txt").write_text("mine")
-...     pkg = write_package(pkg, {"b.py": b"y = 2\\n"}, {})
+...     pkg = write_package(pkg, {"b.py": b"y = 2\\n"}, names)
 ...     sorted(p.name for p in pkg.iterdir())
 ['b.py', 'names.json', 'notes.txt']
 """
@@ -36,18 +37,27 @@ __all__ = ["NAMES_FILE", "emitted_entries", "write_package"]
 NAMES_FILE = "names.json"
 #: The files of packages emitted before ``names.json`` listed them (and each stage module).
 _FIXED = ("__init__.py", "__main__.py", "_kernels.py", "program.py", "weights.npz")
+#: Keys every ``names.json`` emit writes holds (a user's own ``names.json`` is not emit's).
+_MARKS = ("package", "chain", "target", "radarsnn_version", "stages")
 
 
-def _listed(names: object) -> set[str]:
+def _names(folder: Path) -> dict | None:
+    """The ``names.json`` body of the package ``folder``; None if it holds no emitted one."""
+    try:
+        names = load_json(read_bytes(folder / NAMES_FILE).decode("utf-8"), error=ArtifactError)
+    except (RadarSNNError, ValueError):  # absent, unreadable, edited
+        return None
+    return names if isinstance(names, dict) and all(k in names for k in _MARKS) else None
+
+
+def _listed(names: dict) -> set[str]:
     """The file names a ``names.json`` body says emit wrote (plain names, no folders)."""
-    if not isinstance(names, dict):
-        return set()
     files = names.get("files")
     if files is None:  # an older package: its fixed files, stages and networks
-        stages = names.get("stages")
+        stages, nets = names.get("stages"), names.get("networks")
         files = [*_FIXED, *(f"{m}.py" for m in (stages.values() if isinstance(stages, dict)
                                                  else ())),
-                 *(f"{n.get('module')}.py" for n in names.get("networks") or ()
+                 *(f"{n.get('module')}.py" for n in (nets if isinstance(nets, list) else ())
                    if isinstance(n, dict))]
     if not isinstance(files, list):
         return set()
@@ -62,9 +72,8 @@ def emitted_entries(folder: Path) -> set[str]:
     >>> emitted_entries(Path("/nonexistent"))
     set()
     """
-    try:
-        names = load_json(read_bytes(folder / NAMES_FILE).decode("utf-8"), error=ArtifactError)
-    except (RadarSNNError, ValueError):  # absent, unreadable or edited: nothing is ours
+    names = _names(folder)
+    if names is None:  # not an emitted package: nothing in it is ours
         return set()
     files = _listed(names) | {NAMES_FILE}
     cache = folder / "__pycache__"
@@ -107,9 +116,10 @@ def write_package(folder: str | Path, files: Mapping[str, bytes], names: Mapping
     data = {**files, NAMES_FILE: (json.dumps(body, indent=1, sort_keys=True, ensure_ascii=True)
                                   + "\n").encode()}
     try:
-        if folder.is_dir() and not (folder / NAMES_FILE).is_file() and any(folder.iterdir()):
+        if folder.is_dir() and _names(folder) is None and any(folder.iterdir()):
             raise ArtifactError(f"{folder}: exists and is not a generated package (no "
-                                f"{NAMES_FILE}); choose another output directory or name")
+                                f"{NAMES_FILE} written by emit); choose another output "
+                                "directory or name")
         replace_directory(folder, lambda tmp: [write_file(tmp / n, data[n], sync=False)
                                                for n in sorted(data)],
                           owned=emitted_entries, keep=True, durable=False)
