@@ -76,7 +76,7 @@ def _cmd_schema(args: argparse.Namespace) -> int:
     from ir import chain_schema
 
     text = json.dumps(chain_schema(), indent=2, sort_keys=True)
-    if args.output:
+    if args.output is not None:
         write_output(args.output, (text + "\n").encode("utf-8"), "the schema")
     else:
         print(text)
@@ -88,14 +88,17 @@ def write_output(path: str | Path, data: bytes, what: str) -> None:
 
     Raises
     ------
+    ArtifactError
+        ``path`` is no place for a file (a device, a folder, a NUL byte...).
     RadarSNNError
         Naming ``path`` (and the reason, e.g. no space left on the device) when it
         cannot be written; a previous file at ``path`` is kept, no temporary is left.
     """
-    from backends.atomic import write_atomic
+    from backends.atomic import check_output, write_atomic
 
+    path = check_output(path)  # the name as given: Path() would drop a trailing "/"
     try:
-        write_atomic(Path(path), data, durable=True)
+        write_atomic(path, data, durable=True)
     except (OSError, ValueError) as err:  # ValueError: a NUL byte, an empty file name
         reason = getattr(err, "strerror", None) or err
         raise RadarSNNError(f"cannot write {what} to {path}: {reason} (nothing was written; "
@@ -267,7 +270,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     report = program.records.report
     if report is None:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
-    if args.core_map:
+    if args.core_map is not None:
         write_output(args.core_map, report.core_map_png(), "the core map")
     if args.format == "json" or args.json:
         print(report.to_json())
