@@ -16,6 +16,7 @@ import io
 import os
 import random
 import signal
+import stat
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -109,6 +110,20 @@ class DiskFull:
             yield budget
 
 
+def device_node(folder: Path) -> Path | None:
+    """A character device like ``/dev/null`` at ``folder/null`` (None where it cannot be made).
+
+    Tests of output paths use it, never ``/dev/null`` itself: a writer that renamed its
+    file over the path would replace the system's null device with a regular file.
+    """
+    path = Path(folder) / "null"
+    try:
+        os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    except (AttributeError, OSError):  # not root, or no mknod on this system
+        return None
+    return path
+
+
 def listing(root: Path) -> list[str]:
     """Every path below ``root`` (relative, sorted): what a fault may have left behind."""
     return sorted(str(p.relative_to(root)) for p in Path(root).rglob("*"))
@@ -120,7 +135,8 @@ def tree_bytes(root: Path) -> dict[str, bytes]:
             if p.is_file()}
 
 
-__all__ = ["DiskFull", "fault_chain", "kill_while_saving", "listing", "tree_bytes"]
+__all__ = ["DiskFull", "device_node", "fault_chain", "kill_while_saving", "listing",
+           "tree_bytes"]
 
 
 def fault_chain(name: str) -> tuple:
