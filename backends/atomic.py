@@ -11,6 +11,12 @@ mixture.  Where the exchange is not available (another OS, a file system without
 old directory is first renamed aside to ``.NAME.PID-TOKEN.old`` and the new one renamed
 into place: a kill between those two renames leaves the old tree beside ``NAME``.
 
+Replacing deletes only what an earlier write put there: the caller of
+:func:`replace_directory` names those entries (``owned``, at every depth), anything else in
+the old directory is refused or carried into the new one (``keep``).  :func:`check_output`
+refuses a path no file (or folder) can be written to: a device such as ``/dev/null``, a
+pipe, a folder given for a file, a NUL byte.
+
 A failed write (a full disk, a read-only folder) removes its temporary before the
 error propagates; temporaries of *dead* processes (a kill, a power cut) are removed
 by the next write to the same name.  Temporaries whose process is still running
@@ -41,11 +47,11 @@ from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
+from backends.output_path import check_output
 from ir.errors import ArtifactError
-from ir.model import short_repr
 
 __all__ = ["check_output", "replace_directory", "stale_temporaries", "write_atomic",
-           "write_atomic_files", "write_file"]
+           "write_atomic_files", "write_file"]  # check_output: from backends.output_path
 
 T = TypeVar("T")
 
@@ -161,62 +167,6 @@ def _remove(path: Path) -> None:
         _unlink(path)
 
 
-def check_output(path: str | os.PathLike, *, folder: bool = False) -> Path:
-    """``path`` as a :class:`~pathlib.Path`, if a writer may create or replace a file there.
-
-    Parameters
-    ----------
-    path : str or path-like
-    folder : bool
-        The output is a folder (else a regular file).
-
-    Raises
-    ------
-    ArtifactError
-        An empty name, a NUL byte, a file name ending in ``/``, a name the system
-        refuses (too long, a file used as a folder), or an existing entry of another
-        kind: a device such as ``/dev/null``, a pipe, a folder for a file (a file for
-        a folder).  The message names the path and what to give instead.
-
-    Examples
-    --------
-    >>> check_output("out/x.npz")
-    PosixPath('out/x.npz')
-    >>> check_output("/dev/null")
-    Traceback (most recent call last):
-    ir.errors.ArtifactError: output '/dev/null' exists and is not a regular file (a character \
-device); give the path of a file to create or replace
-    """
-    text = os.fsdecode(os.fspath(path))
-    shown = short_repr(text)
-    kind = "folder" if folder else "file"
-    if not text.strip():
-        raise ArtifactError(f"output {shown} is empty; give the path of a {kind}")
-    if "\0" in text:
-        raise ArtifactError(f"output {shown} contains a NUL byte; give a path without one")
-    if not folder and text.endswith(("/", os.sep)):
-        raise ArtifactError(f"output {shown} ends with a path separator; give a file name")
-    try:
-        mode = os.stat(text).st_mode
-    except FileNotFoundError:
-        return Path(text)
-    except OSError as exc:  # a name too long, a file used as a folder, a loop of links
-        raise ArtifactError(f"output {shown} cannot be used ({exc.strerror}); give another "
-                            f"path of a {kind}") from None
-    if folder and not stat.S_ISDIR(mode):
-        raise ArtifactError(f"output {shown} exists and is not a folder; give the path of a "
-                            "folder to create or replace")
-    if not folder and not stat.S_ISREG(mode):
-        raise ArtifactError(f"output {shown} exists and is not a regular file "
-                            f"(a {_KINDS.get(stat.S_IFMT(mode), 'special file')}); give the "
-                            "path of a file to create or replace")
-    return Path(text)
-
-
-_KINDS = {stat.S_IFDIR: "folder", stat.S_IFCHR: "character device", stat.S_IFBLK: "block device",
-          stat.S_IFIFO: "pipe", stat.S_IFSOCK: "socket"}
-
-
 def write_atomic(path: Path, data: bytes, *, durable: bool = False) -> None:
     """Write ``data`` to a hidden temporary beside ``path``, then rename it over ``path``.
 
@@ -256,7 +206,8 @@ def write_atomic_files(files: Mapping[Path, bytes], *, durable: bool = False) ->
     Raises
     ------
     ArtifactError, OSError
-        As :func:`write_atomic`; every temporary is removed, no file is changed.
+        As :func:`write_atomic`; every temporary is removed (a failed write changes no
+        file; a failed rename, after the others, leaves those renamed before it).
 
     Examples
     --------
