@@ -41,12 +41,14 @@ Examples
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import nir
 import numpy as np
 
-from ir.errors import IRError
+from backends.atomic import check_output, write_atomic
+from ir.errors import ArtifactError, IRError
 from ir.ops.classify import LIF, Classifier, Conv2d, Dense, Integrator, Pool, Recurrent
 
 __all__ = ["import_classifier", "read_graph"]
@@ -154,8 +156,8 @@ def import_classifier(
     graph : nir.NIRGraph or path
         The graph, or a ``.nir`` file read with :func:`nir.read`.
     weights_path : path
-        Where the weights ``.npz`` is written (keys ``layers.<i>.weight`` / ``.recurrent``);
-        the op's ``weights`` field names it.
+        Where the weights ``.npz`` is written, atomically (keys ``layers.<i>.weight`` /
+        ``.recurrent``); the op's ``weights`` field names it.
     dt_s : float
         Step duration when the graph has no ``radarsnn_dt_s`` metadata.
     reset : {"value", "subtract"}
@@ -175,6 +177,8 @@ def import_classifier(
     ------
     IRError
         Naming the NIR node that has no classifier form.
+    ArtifactError
+        ``weights_path`` is no place for a file (a device, a folder), or cannot be written.
     """
     if not isinstance(graph, nir.NIRGraph):
         graph = read_graph(graph)
@@ -248,5 +252,11 @@ def import_classifier(
                               f"{op.encoding.kind!r} gives {op.encoding.channels}; pass a "
                               "matching encoding")
     arrays = op.check_weights("classifier", shape[1:], arrays)
-    np.savez(weights_path, **arrays)
+    npz = io.BytesIO()
+    np.savez(npz, **arrays)
+    try:  # whole or not at all, at the path the op names (np.savez would add ".npz")
+        write_atomic(check_output(weights_path), npz.getvalue())
+    except OSError as exc:
+        raise ArtifactError(f"cannot write the classifier weights to {weights_path}: "
+                            f"{exc.strerror or exc}") from exc
     return op
