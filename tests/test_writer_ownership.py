@@ -181,3 +181,10 @@ def test_sweep_figure_names_must_be_plain_file_names(tmp_path):
     with pytest.raises(CompileError, match="outside"):
         draw_figures([forged], rows, tmp_path / "figures")
     assert listing(tmp_path) == ["figures"]
+
+
+def test_run_output_named_like_a_folder_goes_beside_it(files, tmp_path):
+    art, x = files
+    (tmp_path / "out").mkdir()
+    assert main(["run", str(art), "-i", str(x), "-o", str(tmp_path / "out"), "-q"]) == 0
+    assert listing(tmp_path) == ["out", "out.npz"]  # the .npz suffix names another path

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -27,7 +28,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     path = None
     if args.output is not None:  # before any work: a device (/dev/null), a folder, a NUL byte
-        given = str(check_output(args.output))
+        given = str(args.output)
+        if given.endswith(("/", os.sep)) or not os.path.isdir(given):  # `-o out` beside a
+            check_output(given)  # folder `out` writes out.npz; no /dev/null.npz beside a device
         path = check_output(given if given.endswith(".npz") else f"{given}.npz")
     loaded = load(args.artifact)
     if is_program(args.artifact):
