@@ -177,7 +177,8 @@ def test_odd_output_paths_are_refused_in_one_line(inputs, tmp_path, capsys, monk
     folder = writer in FOLDER_WRITERS
     command = (FOLDER_WRITERS if folder else FILE_WRITERS)[writer]
     monkeypatch.chdir(tmp_path)
-    paths = _odd_paths(tmp_path, folder)
+    paths = [p for p in _odd_paths(tmp_path, folder)  # `run -o DIR` writes DIR.npz beside it
+             if not (writer == "run" and p == str(tmp_path / "dir"))]
     before = tree_bytes(tmp_path), listing(tmp_path)
     for path in paths:
         code = main(command(inputs, path))
