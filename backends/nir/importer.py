@@ -46,6 +46,7 @@ from pathlib import Path
 import nir
 import numpy as np
 
+from backends.nir.reading import read_nir
 from ir.errors import IRError
 from ir.ops.classify import LIF, Classifier, Conv2d, Dense, Integrator, Pool, Recurrent
 
@@ -56,8 +57,14 @@ _READOUT = (nir.LI, nir.I, nir.CubaLI)
 
 
 def read_graph(path: str | Path) -> nir.NIRGraph:
-    """Read a NIR file with the real ``nir`` package (HDF5; no code is executed)."""
-    return nir.read(path)
+    """Read a NIR file within bounds (:func:`backends.nir.reading.read_nir`; no code runs).
+
+    Raises
+    ------
+    ArtifactError
+        Naming the file, the HDF5 node path and the limit (docs/reliability.md).
+    """
+    return read_nir(path)
 
 
 def _fail(name: str, message: str) -> IRError:
@@ -152,7 +159,7 @@ def import_classifier(
     Parameters
     ----------
     graph : nir.NIRGraph or path
-        The graph, or a ``.nir`` file read with :func:`nir.read`.
+        The graph, or a ``.nir`` file read with :func:`read_graph` (bounded).
     weights_path : path
         Where the weights ``.npz`` is written (keys ``layers.<i>.weight`` / ``.recurrent``);
         the op's ``weights`` field names it.
