@@ -40,7 +40,7 @@ import numpy as np
 
 from ir.errors import ArtifactError
 
-__all__ = ["ReadBounds", "read_nir"]
+__all__ = ["DEFAULT_BOUNDS", "ReadBounds", "read_nir"]
 
 #: Dtype kinds a NIR dataset may have: floats, signed/unsigned integers, booleans, byte strings.
 _KINDS = frozenset("fiubS")
@@ -69,6 +69,10 @@ class ReadBounds:
     max_objects: int = 1 << 18
     max_dataset_entries: int = 1 << 24
     max_total_bytes: int = 1 << 30
+
+
+#: The bounds :func:`read_nir` applies unless told otherwise.
+DEFAULT_BOUNDS = ReadBounds()
 
 
 class _Walk:
@@ -179,7 +183,7 @@ def _name(value: Any, walk: _Walk, where: str) -> str:
     return value
 
 
-def read_nir(path: str | Path, *, bounds: ReadBounds = ReadBounds(),
+def read_nir(path: str | Path, *, bounds: ReadBounds = DEFAULT_BOUNDS,
              type_check: bool = True) -> nir.NIRGraph:
     """Read a NIR graph file within ``bounds`` (no code runs; nothing unbounded is read).
 
