@@ -249,8 +249,8 @@ def export_network(
 
 
 def export_program(
-    program: CompiledProgram, *, stages: Iterable[str] | None = None, dt_s: float = 1.0,
-    max_weights: int = MAX_WEIGHTS
+    program: CompiledProgram, *, stages: Iterable[str] | None = None,
+    dt_s: float | None = None, max_weights: int = MAX_WEIGHTS
 ) -> tuple[nir.NIRGraph, ExportReport]:
     """Export a compiled program's spiking networks (or the chosen stages) to one NIR graph.
 
@@ -260,7 +260,10 @@ def export_program(
         The compiled chain.
     stages : iterable of str, optional
         IR node ids; only networks with a population of one of these nodes are exported.
-    dt_s, max_weights
+    dt_s : float, optional
+        Duration of one step; default the target profile's ``time_step_s`` (1 s for a
+        program compiled without a target or a profile without one).
+    max_weights : int
         As for :func:`export_network`.
 
     Returns
@@ -286,6 +289,8 @@ def export_program(
         raise ArtifactError(f"program {program.graph.name!r}: no spiking network to export "
                             f"(stages {sorted(wanted) if wanted else 'all'}); choose IR nodes "
                             "that were lowered to spikes")
+    if dt_s is None:
+        dt_s = float(getattr(program.target, "time_step_s", None) or 1.0)
     return _export(nets, host, dt_s, max_weights, name=program.graph.name)
 
 

@@ -134,7 +134,7 @@ def _from_entries(graph: nir.NIRGraph, where: str) -> list[SpikingNetwork]:
 
 
 def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
-               bounds: ReadBounds = DEFAULT_BOUNDS) -> list[SpikingNetwork]:
+               n_steps: int = 100, bounds: ReadBounds = DEFAULT_BOUNDS) -> list[SpikingNetwork]:
     """The spiking networks of a NIR graph (a radarsnn export exactly, else the subset).
 
     Parameters
@@ -145,6 +145,8 @@ def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
     dt_s : float, optional
         Step of a graph that is not radarsnn's and has no ``radarsnn_dt_s`` metadata
         (:func:`backends.nir.generic.import_generic`); radarsnn's own exports need none.
+    n_steps : int
+        Steps per run of a graph that is not radarsnn's (its own exports store theirs).
     bounds : ReadBounds
         Limits of the file read.
 
@@ -171,4 +173,4 @@ def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
             raise ArtifactError(f"{where}: radarsnn round-trip metadata version {version!r}; "
                                 "this radarsnn reads version '1' (export it again)")
         return _from_entries(graph, where)
-    return [import_generic(graph, dt_s=dt_s, name=Path(where).stem)]
+    return [import_generic(graph, dt_s=dt_s, n_steps=n_steps, name=Path(where).stem)]
