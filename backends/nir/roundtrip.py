@@ -41,7 +41,7 @@ from backends.nir.entries import ARRAY_PREFIX
 from backends.nir.generic import import_generic
 from backends.nir.reading import DEFAULT_BOUNDS, ReadBounds, read_nir
 from compiler.snn.network import SpikingNetwork
-from ir.errors import ArtifactError, RadarSNNError
+from ir.errors import ArtifactError, IRError, RadarSNNError
 
 __all__ = ["import_nir"]
 
@@ -173,4 +173,9 @@ def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
             raise ArtifactError(f"{where}: radarsnn round-trip metadata version {version!r}; "
                                 "this radarsnn reads version '1' (export it again)")
         return _from_entries(graph, where)
-    return [import_generic(graph, dt_s=dt_s, n_steps=n_steps, name=Path(where).stem)]
+    try:
+        return [import_generic(graph, dt_s=dt_s, n_steps=n_steps, name=Path(where).stem)]
+    except IRError as exc:
+        if isinstance(source, nir.NIRGraph):
+            raise
+        raise IRError(f"{where}: {exc}", node=exc.node) from None
