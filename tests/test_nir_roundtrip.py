@@ -152,6 +152,10 @@ def test_subset_and_metadata_errors_name_the_node(tmp_path) -> None:
     graph.nodes["a.w.d0"].metadata.pop("radarsnn_array_delays")
     with pytest.raises(ArtifactError, match=r"NIR node 'a.w.d0': the 'delays' array"):
         import_nir(graph)
+    graph, _ = export_network(_zoo())
+    graph.nodes["b.w.d0"].weight[0, 0] += 0.5  # trained further elsewhere: entries are stale
+    with pytest.raises(ArtifactError, match=r"NIR node 'b.w.d0' differs .* edited after"):
+        import_nir(graph)
     graph.metadata["radarsnn_round_trip"] = "9"
     with pytest.raises(ArtifactError, match="version '9'"):
         import_nir(graph)

@@ -296,6 +296,7 @@ def export_program(
 
 def _export(nets: list[SpikingNetwork], host: list[str], dt_s: float, max_weights: int,
             name: str) -> tuple[nir.NIRGraph, ExportReport]:
+    """The NIR graph and report of ``nets`` (``n<k>.``-prefixed when several)."""
     if not (np.isfinite(dt_s) and dt_s > 0):
         raise ArtifactError(f"NIR export of {name!r}: dt_s must be a positive number of "
                             f"seconds, got {dt_s}")
@@ -311,7 +312,8 @@ def _export(nets: list[SpikingNetwork], host: list[str], dt_s: float, max_weight
                    "evaluated on the host, outside the spiking networks")
     meta = _meta(dt_s=dt_s, convention=CONVENTION, name=name,
                  networks=[n.name for n in nets], n_steps=[n.n_steps for n in nets],
-                 artifacts=[network_entry(n) for n in nets], round_trip=ROUND_TRIP_VERSION)
+                 artifacts=[network_entry(n) for n in nets], round_trip=ROUND_TRIP_VERSION,
+                 max_weights=max_weights)
     return nir.NIRGraph(nodes=nodes, edges=edges, metadata=meta, type_check=not compact), report
 
 

@@ -130,7 +130,12 @@ class _Walk:
         if self.total_bytes > b.max_total_bytes:
             raise self.fail(where, f"the datasets declare more than max_total_bytes="
                                    f"{b.max_total_bytes} bytes in all")
-        value = ds[()]
+        try:
+            value = ds[()]
+        except (OSError, ValueError, TypeError, RuntimeError) as exc:  # a damaged chunk
+            text = str(exc).splitlines()[0] if str(exc) else ""
+            raise self.fail(where, f"cannot be read ({type(exc).__name__}: {text[:200]})"
+                            ) from None
         return _text(value, self, where) if string is not None or dtype.kind == "S" else value
 
 

@@ -5,7 +5,9 @@ artifact entries of every population and projection (:mod:`backends.nir.entries`
 :func:`import_nir` reassembles the manifest of each network and rebuilds it with
 the artifact decoder (:func:`backends.artifact_codec.network_from_manifest`), so
 the network equals the exported one field for field and simulates to the same
-bits.  Any other graph is read as the NIR subset of :mod:`backends.nir.generic`.
+bits.  The file's NIR nodes must be what exporting those networks gives again: a graph
+edited by another tool after export is refused (strip its ``radarsnn_*`` metadata to read
+it as a plain NIR graph).  Any other graph is read as the NIR subset of :mod:`backends.nir.generic`.
 
 Examples
 --------
@@ -133,6 +135,39 @@ def _from_entries(graph: nir.NIRGraph, where: str) -> list[SpikingNetwork]:
     return nets
 
 
+#: The NIR fields compared between a file and the export of the networks read from it.
+_FIELDS = ("weight", "bias", "tau", "r", "v_leak", "v_threshold", "v_reset", "tau_syn",
+           "tau_mem", "w_in", "delay")
+
+
+def _check_dynamics(graph: nir.NIRGraph, nets: list[SpikingNetwork], where: str) -> None:
+    """The file's NIR nodes must be what exporting ``nets`` gives: not edited since export."""
+    from backends.nir.export import _export  # the exporter, to redo the export
+
+    meta = graph.metadata
+    try:
+        dt_s = float(_text(meta.get("radarsnn_dt_s")))
+        max_weights = int(_text(meta.get("radarsnn_max_weights")))
+    except (TypeError, ValueError):
+        raise ArtifactError(f"{where}: radarsnn_dt_s and radarsnn_max_weights must be "
+                            "numbers") from None
+    again, _ = _export(nets, [], dt_s, max_weights, name=nets[0].name if nets else "")
+    edited = "was edited after export; strip its radarsnn metadata to import it as a NIR graph"
+    if set(again.nodes) != set(graph.nodes) or sorted(again.edges) != sorted(
+            tuple(e) for e in graph.edges):
+        extra = sorted(set(graph.nodes) ^ set(again.nodes))[:4]
+        raise ArtifactError(f"{where}: the NIR nodes or edges differ from the radarsnn entries "
+                            f"(nodes {extra}): the graph {edited}")
+    for name, node in again.nodes.items():
+        theirs = graph.nodes[name]
+        same = type(theirs) is type(node) and all(
+            np.array_equal(np.asarray(getattr(theirs, f)), np.asarray(getattr(node, f)))
+            for f in _FIELDS if hasattr(node, f))
+        if not same:
+            raise ArtifactError(f"{where}: NIR node {name!r} differs from its radarsnn entry: "
+                                f"the graph {edited}", node=name)
+
+
 def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
                n_steps: int = 100, bounds: ReadBounds = DEFAULT_BOUNDS) -> list[SpikingNetwork]:
     """The spiking networks of a NIR graph (a radarsnn export exactly, else the subset).
@@ -172,7 +207,9 @@ def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
         if version != "1":
             raise ArtifactError(f"{where}: radarsnn round-trip metadata version {version!r}; "
                                 "this radarsnn reads version '1' (export it again)")
-        return _from_entries(graph, where)
+        nets = _from_entries(graph, where)
+        _check_dynamics(graph, nets, where)
+        return nets
     try:
         return [import_generic(graph, dt_s=dt_s, n_steps=n_steps, name=Path(where).stem)]
     except IRError as exc:
