@@ -6,6 +6,7 @@ tool (the NIR subset) runs to the spikes of an independent NIR interpreter."""
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import nir
 import numpy as np
@@ -155,6 +156,12 @@ def test_subset_and_metadata_errors_name_the_node(tmp_path) -> None:
     graph, _ = export_network(_zoo())
     graph.nodes["b.w.d0"].weight[0, 0] += 0.5  # trained further elsewhere: entries are stale
     with pytest.raises(ArtifactError, match=r"NIR node 'b.w.d0' differs .* edited after"):
+        import_nir(graph)
+    graph, _ = export_network(_zoo())  # a forged entry of 10^12 neurons allocates nothing
+    entry = json.loads(graph.nodes["a.lif"].metadata["radarsnn_entry"])
+    entry["shape"] = [["rep", 10**6], ["o", 10**6]]
+    graph.nodes["a.lif"].metadata["radarsnn_entry"] = json.dumps(entry)
+    with pytest.raises(ArtifactError, match=r"'a.lif' has 6 neurons, its radarsnn entry 10+$"):
         import_nir(graph)
     graph.metadata["radarsnn_round_trip"] = "9"
     with pytest.raises(ArtifactError, match="version '9'"):

@@ -199,10 +199,15 @@ def import_generic(graph: nir.NIRGraph, *, dt_s: float | None = None, n_steps: i
                 raise _fail(key, "a Delay must feed Linear/Affine nodes only")
         elif isinstance(node, _SPIKING + _CURRENT + (nir.Input,)):
             for t in (t for t in succ[key] if t in entry and key in sizes):
-                gain = params[entry[t]][1]  # an edge neuron -> neuron: identity weights
+                target, gain = entry[t], params[entry[t]][1]  # neuron -> neuron: identity
+                n = sizes[key]
+                if n != sizes[target]:
+                    raise _fail(key, f"an edge to {t!r} joins {n} to {sizes[target]} neurons; "
+                                     "put a Linear between them")
                 projections.append(MatrixProjection(
-                    id=f"{key}->{entry[t]}", source=key, target=entry[t], contract=("i",),
-                    produce=("i",), weights=np.eye(sizes[key]) * gain))
+                    id=f"{key}->{target}", source=key, target=target, contract=("i",),
+                    produce=("i",), rows=np.arange(n), cols=np.arange(n),
+                    values=np.full(n, gain), n_in_out=(n, n)))
         elif isinstance(node, nir.Output):
             if len(preds[key]) != 1 or preds[key][0] not in params:
                 raise _fail(key, "an Output must read one spiking node")

@@ -93,12 +93,21 @@ def _arrays(name: str, node: nir.NIRNode, entry: dict) -> dict[str, np.ndarray]:
     return out
 
 
+def _node_size(node: nir.NIRNode) -> int:
+    """Neurons of a population's NIR node: an Input's declared shape, a neuron's arrays."""
+    if isinstance(node, nir.Input):
+        shape = np.asarray(node.output_type.get("output", ()), dtype=np.float64)
+        return int(np.prod(shape)) if shape.size and np.all(shape >= 0) else -1
+    return int(np.asarray(getattr(node, "v_threshold", ())).size)
+
+
 def _from_entries(graph: nir.NIRGraph, where: str) -> list[SpikingNetwork]:
     infos = _json(graph.metadata.get("radarsnn_artifacts"), where, "radarsnn_artifacts")
     if not isinstance(infos, list) or not all(isinstance(i, dict) for i in infos):
         raise ArtifactError(f"{where}: radarsnn_artifacts must be a list of network entries")
     found: list[dict[str, dict]] = [{"populations": {}, "projections": {}} for _ in infos]
     arrays: list[dict[str, np.ndarray]] = [{} for _ in infos]
+    sizes: list[dict[int, tuple[str, int]]] = [{} for _ in infos]
     for name, node in graph.nodes.items():
         meta = node.metadata if isinstance(node.metadata, dict) else {}
         if "radarsnn_entry" not in meta:
@@ -114,6 +123,8 @@ def _from_entries(graph: nir.NIRGraph, where: str) -> list[SpikingNetwork]:
         found[k][part][index] = entry
         if part == "projections":
             arrays[k].update(_arrays(name, node, entry))
+        else:
+            sizes[k][index] = (name, _node_size(node))
     nets = []
     for k, info in enumerate(infos):
         lists = {}
@@ -124,8 +135,15 @@ def _from_entries(graph: nir.NIRGraph, where: str) -> list[SpikingNetwork]:
             lists[part] = [by_index[i] for i in range(len(by_index))]
         manifest = {**info, **lists}
         try:
-            nets.append(network_from_manifest(manifest, arrays[k], PROJECTION_KINDS,
-                                              Path(where)).validate())
+            net = network_from_manifest(manifest, arrays[k], PROJECTION_KINDS, Path(where))
+            for index, pop in enumerate(net.populations):  # before anything is allocated
+                name, size = sizes[k][index]
+                if pop.size != size:
+                    raise ArtifactError(f"{where}: NIR node {name!r} has {size} neurons, its "
+                                        f"radarsnn entry {pop.size}", node=name)
+            nets.append(net.validate())
+        except ArtifactError:
+            raise
         except RadarSNNError as exc:
             raise ArtifactError(f"{where}: network {k}: {exc}") from None
         except (ValidationError, KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -140,14 +158,19 @@ _FIELDS = ("weight", "bias", "tau", "r", "v_leak", "v_threshold", "v_reset", "ta
            "tau_mem", "w_in", "delay")
 
 
-def _check_dynamics(graph: nir.NIRGraph, nets: list[SpikingNetwork], where: str) -> None:
-    """The file's NIR nodes must be what exporting ``nets`` gives: not edited since export."""
+def _check_dynamics(graph: nir.NIRGraph, nets: list[SpikingNetwork], where: str,
+                    bounds: ReadBounds) -> None:
+    """The file's NIR nodes must be what exporting ``nets`` gives: not edited since export.
+
+    A readable file holds no dense ``Linear`` over ``bounds.max_dataset_entries``, so the
+    export is redone with ``max_weights`` at most that (a forged larger one allocates nothing).
+    """
     from backends.nir.export import _export  # the exporter, to redo the export
 
     meta = graph.metadata
     try:
         dt_s = float(_text(meta.get("radarsnn_dt_s")))
-        max_weights = int(_text(meta.get("radarsnn_max_weights")))
+        max_weights = min(int(_text(meta.get("radarsnn_max_weights"))), bounds.max_dataset_entries)
     except (TypeError, ValueError):
         raise ArtifactError(f"{where}: radarsnn_dt_s and radarsnn_max_weights must be "
                             "numbers") from None
@@ -208,7 +231,7 @@ def import_nir(source: nir.NIRGraph | str | Path, *, dt_s: float | None = None,
             raise ArtifactError(f"{where}: radarsnn round-trip metadata version {version!r}; "
                                 "this radarsnn reads version '1' (export it again)")
         nets = _from_entries(graph, where)
-        _check_dynamics(graph, nets, where)
+        _check_dynamics(graph, nets, where, bounds)
         return nets
     try:
         return [import_generic(graph, dt_s=dt_s, n_steps=n_steps, name=Path(where).stem)]
