@@ -163,6 +163,10 @@ def test_subset_and_metadata_errors_name_the_node(tmp_path) -> None:
     graph.nodes["a.lif"].metadata["radarsnn_entry"] = json.dumps(entry)
     with pytest.raises(ArtifactError, match=r"'a.lif' has 6 neurons, its radarsnn entry 10+$"):
         import_nir(graph)
+    from backends.nir.importer import import_classifier
+
+    with pytest.raises(IRError, match="exported by radarsnn.*import-nir"):
+        import_classifier(graph, tmp_path / "w.npz")
     graph.metadata["radarsnn_round_trip"] = "9"
     with pytest.raises(ArtifactError, match="version '9'"):
         import_nir(graph)

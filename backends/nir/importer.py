@@ -181,10 +181,15 @@ def import_classifier(
     Raises
     ------
     IRError
-        Naming the NIR node that has no classifier form.
+        Naming the NIR node that has no classifier form, or for a graph radarsnn exported
+        (read those with :func:`backends.nir.import_nir`).
     """
     if not isinstance(graph, nir.NIRGraph):
         graph = read_graph(graph)
+    if isinstance(graph.metadata, dict) and "radarsnn_round_trip" in graph.metadata:
+        raise IRError("NIR graph: exported by radarsnn (metadata radarsnn_round_trip); read it "
+                      "back with backends.nir.import_nir (radarsnn import-nir), which restores "
+                      "its spiking networks exactly, not as a classifier op")
     meta_dt = graph.metadata.get("radarsnn_dt_s") if isinstance(graph.metadata, dict) else None
     dt = float(meta_dt.decode() if isinstance(meta_dt, bytes) else meta_dt) if meta_dt else dt_s
     chain, loops = _chain(graph)
