@@ -6,9 +6,9 @@ follows hard-link cycles until ``RecursionError``, and reads every dataset whole
 the file itself with ``h5py`` and checks, before anything is read:
 
 * the file size (``max_file_bytes``);
-* the group nesting (``max_depth``) and the number of objects visited
-  (``max_objects``; a group reached twice through hard links counts twice);
-* links: only hard links, and none to a group on its own path (a cycle);
+* the group nesting (``max_depth``) and the number of objects (``max_objects``);
+* links: only hard links, none to a group on its own path (a cycle), and no object
+  reached twice (``nir.write`` writes a tree; a diamond of links would multiply the walk);
 * each dataset's dtype (numbers, booleans or strings only) and its size from the
   declared shape (``max_dataset_entries`` entries, ``max_total_bytes`` in all),
   never by decompressing it;
@@ -57,7 +57,7 @@ class ReadBounds:
     max_depth : int
         Deepest group nesting (32; a radarsnn export uses 5).
     max_objects : int
-        Groups and datasets visited, hard-link repeats included (2^18).
+        Groups and datasets in the file (2^16; each is reached once).
     max_dataset_entries : int
         Largest dataset, in entries (2^24, the export's ``MAX_WEIGHTS``).
     max_total_bytes : int
@@ -66,7 +66,7 @@ class ReadBounds:
 
     max_file_bytes: int = 1 << 30
     max_depth: int = 32
-    max_objects: int = 1 << 18
+    max_objects: int = 1 << 16
     max_dataset_entries: int = 1 << 24
     max_total_bytes: int = 1 << 30
 
@@ -82,6 +82,7 @@ class _Walk:
         self.path, self.bounds = path, bounds
         self.objects = 0
         self.total_bytes = 0
+        self.seen: set[int] = set()  # HDF5 addresses of the objects reached
 
     def fail(self, where: str, message: str) -> ArtifactError:
         return ArtifactError(f"NIR file {self.path}: {where}: {message}", node=where)
@@ -97,16 +98,20 @@ class _Walk:
             self.objects += 1
             if self.objects > b.max_objects:
                 raise self.fail(here, f"more than max_objects={b.max_objects} groups and "
-                                      "datasets (hard links counted each time)")
+                                      "datasets")
             link = group.get(name, getlink=True)
             if not isinstance(link, h5py.HardLink):
                 raise self.fail(here, f"is a {type(link).__name__}; a NIR file holds only "
                                       "hard links (soft and external links are refused)")
             item = group[name]
+            address = h5py.h5o.get_info(item.id).addr
+            if address in on_path:
+                raise self.fail(here, "links back to a group on its own path (a cycle)")
+            if address in self.seen:
+                raise self.fail(here, "is a second hard link to an object already read; a NIR "
+                                      "file is a tree")
+            self.seen.add(address)
             if isinstance(item, h5py.Group):
-                address = h5py.h5o.get_info(item.id).addr
-                if address in on_path:
-                    raise self.fail(here, "links back to a group on its own path (a cycle)")
                 out[name] = self.group(item, here, (*on_path, address))
             elif isinstance(item, h5py.Dataset):
                 out[name] = self.dataset(item, here)
