@@ -121,6 +121,10 @@ def test_soft_links_and_a_missing_root(good, tmp_path) -> None:
     with h5py.File(good, "a") as f:
         f["node/nodes/linear/soft"] = h5py.SoftLink("/node/nodes/if")
     _refused(good, r"/node/nodes/linear/soft: is a SoftLink")
+    with h5py.File(good, "a") as f:
+        del f["node/nodes/linear/soft"], f["node/type"]
+        f["node/type"] = np.zeros(0)  # an array where the root's type string belongs
+    _refused(good, r"/node: the root's type is '\[\]', not 'NIRGraph'")
     empty = tmp_path / "empty.nir"
     h5py.File(empty, "w").close()
     _refused(empty, r"/node: missing: not a NIR file")

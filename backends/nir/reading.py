@@ -242,6 +242,7 @@ def read_nir(path: str | Path, *, bounds: ReadBounds = DEFAULT_BOUNDS,
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ArtifactError(f"NIR file {path}: not a readable HDF5 NIR file "
                             f"({type(exc).__name__}: {text[:200]})") from None
-    if tree.get("type") != "NIRGraph":
-        raise walk.fail("/node", f"the root is a {tree.get('type')!r} node, not a NIRGraph")
+    kind = tree.get("type")
+    if not (isinstance(kind, str) and kind == "NIRGraph"):
+        raise walk.fail("/node", f"the root's type is {str(kind)[:40]!r}, not 'NIRGraph'")
     return _build(tree, walk, "/node", type_check)

@@ -160,7 +160,7 @@ def _edit(f: h5py.File, action: str, group: str, dataset: str, data) -> None:
 ACTIONS = ["nest", "cycle", "diamond", "soft", "huge", "dtype", "delete", "utf8", "junk"]
 
 
-@budget(0.25)
+@budget(0.12)
 @given(st.sampled_from(["network", "compact", "program"]), st.sampled_from(ACTIONS), st.data(),
        st.integers(0, 9))
 def test_hostile_hdf5_edits(templates, kind, action, data, slot) -> None:
