@@ -144,3 +144,19 @@ def test_import_nir_writes_artifacts_that_run_like_the_exported_ones(chain, tmp_
     assert main(["import-nir", str(bad), "-o", str(tmp_path / "x")]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: NIR file") and "\n" not in err
+
+
+def test_import_nir_reads_another_tools_graph_with_its_step(tmp_path, capsys):
+    nir = pytest.importorskip("nir")
+    from backends import load
+
+    graph = nir.NIRGraph.from_list(nir.Linear(weight=np.full((2, 3), 0.5)),
+                                   nir.IF(r=np.full(2, 1e3), v_threshold=np.ones(2),
+                                          v_reset=np.zeros(2)))
+    nir.write(tmp_path / "other.nir", graph)
+    assert main(["import-nir", str(tmp_path / "other.nir"), "-o", str(tmp_path / "x")]) == 1
+    assert "pass dt_s (--dt-s)" in capsys.readouterr().err
+    assert main(["import-nir", str(tmp_path / "other.nir"), "-o", str(tmp_path / "net"),
+                 "--dt-s", "1e-3", "--n-steps", "16", "-q"]) == 0
+    net = load(tmp_path / "net")
+    assert net.n_steps == 16 and net.projections[0].weights.tolist() == [[0.5, 0.5]] * 3
