@@ -256,6 +256,9 @@ def test_over_max_weights_a_projection_is_one_compact_node() -> None:
     outside = {e.item for e in report.outside if e.aspect == "weights"}
     assert {"c/w", "d/k"} <= outside and not report.is_exact
     assert ("x.in", "c.w.compact") in graph.edges and ("c.w.compact", "c.ramp.syn") in graph.edges
+    # e/if's constant bias rides on an Affine only when its projection is written dense
+    assert type(graph.nodes["e.w.compact"]).__name__ == "Linear"
+    assert ("e/if", "bias", "outside") in {(e.item, e.aspect, e.kind) for e in report.entries}
 
 
 def test_errors_name_the_projection() -> None:

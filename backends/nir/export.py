@@ -134,7 +134,8 @@ def _add_network(net: SpikingNetwork, k: int, nodes: dict, edges: list, report: 
     for proj in net.projections:
         tgt = pops[proj.target].params
         b = bias_of(pops[proj.target])
-        if (b and tgt.dv == 0 and tgt.du == 1.0 and proj.target not in affine_bias):
+        dense = pops[proj.source].size * pops[proj.target].size <= max_weights  # not compact
+        if (b and dense and tgt.dv == 0 and tgt.du == 1.0 and proj.target not in affine_bias):
             affine_bias[proj.target] = proj.id
     for index, pop in enumerate(net.populations):
         name = nir_name(pop.id, prefix)
