@@ -64,7 +64,19 @@ def _json(value: Any) -> str:
 
 
 def population_meta(pop: Population, index: int, network: int) -> dict[str, str]:
-    """Metadata of a population's NIR node: its artifact entry and positions."""
+    """Metadata of a population's NIR node: its artifact entry and positions.
+
+    Parameters
+    ----------
+    pop : Population
+    index, network : int
+        Its position in the network, the network's in the graph.
+
+    Returns
+    -------
+    dict of str to str
+        ``radarsnn_entry`` (JSON), ``radarsnn_index``, ``radarsnn_network``.
+    """
     return {"radarsnn_entry": _json(population_entry(pop)), "radarsnn_index": str(index),
             "radarsnn_network": str(network)}
 
@@ -84,6 +96,13 @@ def projection_meta(proj: Any, index: int, network: int, weight: np.ndarray | No
         transposed is not stored twice.
     max_entries : int
         Refuse an array over this many entries (the reader's bound).
+
+    Returns
+    -------
+    dict
+        ``radarsnn_entry`` (JSON), ``radarsnn_index``, ``radarsnn_network``, one
+        ``radarsnn_array_<field>`` per array, ``radarsnn_weight_field`` when ``weight``
+        holds one.
 
     Raises
     ------
@@ -113,9 +132,21 @@ def compact_node(proj: Any, src: Population, tgt: Population, max_weights: int
                  ) -> tuple[nir.Linear, str]:
     """The one NIR node of a projection whose dense matrix is too large, and its wording.
 
-    A dense matrix projection whose block fits ``max_weights`` gives ``Linear(W^T)`` (the
-    block shared by its repetitions); anything else an empty ``Linear`` (weights in
-    metadata only).
+    Parameters
+    ----------
+    proj : projection
+    src, tgt : Population
+        Its source and target.
+    max_weights : int
+        The largest block written as a ``Linear``.
+
+    Returns
+    -------
+    node : nir.Linear
+        ``Linear(W^T)`` of a dense matrix projection whose block fits ``max_weights`` (the
+        block shared by its repetitions); else an empty ``Linear`` (weights in metadata only).
+    detail : str
+        The export report's sentence.
     """
     weights = getattr(proj, "weights", None)
     if weights is not None and weights.size <= max_weights:
@@ -131,7 +162,18 @@ def compact_node(proj: Any, src: Population, tgt: Population, max_weights: int
 
 
 def network_entry(net: SpikingNetwork) -> dict[str, Any]:
-    """The network's name, steps, meta, encoders and decoders (graph ``radarsnn_artifacts``)."""
+    """The network's name, steps, meta, encoders and decoders (graph ``radarsnn_artifacts``).
+
+    Examples
+    --------
+    >>> from compiler.snn import RateCode, Encoder
+    >>> net = SpikingNetwork(name="n", n_steps=4, populations=[Population(id="x",
+    ...     shape={"i": 2}, source=True)], encoders=[Encoder(port="x", population="x",
+    ...     code=RateCode())])
+    >>> entry = network_entry(net)
+    >>> entry["network"], entry["encoders"][0]["port"]
+    ({'name': 'n', 'n_steps': 4, 'meta': {}}, 'x')
+    """
     return {"network": {"name": net.name, "n_steps": int(net.n_steps), "meta": net.meta},
             "encoders": [finite_json(e.model_dump(mode="json")) for e in net.encoders],
             "decoders": [finite_json(d.model_dump(mode="json")) for d in net.decoders]}

@@ -127,6 +127,11 @@ def import_generic(graph: nir.NIRGraph, *, dt_s: float | None = None, n_steps: i
     name : str
         The network's name.
 
+    Returns
+    -------
+    SpikingNetwork
+        Validated; populations and decoders named after the NIR nodes.
+
     Raises
     ------
     IRError
