@@ -101,3 +101,62 @@ def test_without_nir_the_error_names_the_extra(chain, tmp_path, capsys, monkeypa
     assert main(["export-nir", str(path), "-o", str(tmp_path / "t.nir")]) != 0
     err = capsys.readouterr().err
     assert err == "error: radarsnn export-nir needs the nir package: pip install 'radarsnn[nir]'\n"
+
+
+def test_dt_defaults_to_the_target_profiles_step(chain, tmp_path, capsys):
+    pytest.importorskip("nir")
+    from backends.nir import read_nir
+
+    path, frames = chain
+    out = tmp_path / "tiny.nir"
+    assert main(["export-nir", str(path), "-c", f"x={frames}", "-o", str(out), "-q"]) == 0
+    assert float(read_nir(out).metadata["radarsnn_dt_s"]) == 1e-05  # loihi2's time_step_s
+    assert main(["export-nir", str(path), "-c", f"x={frames}", "-o", str(out), "-q",
+                 "--dt-s", "0.5"]) == 0
+    assert float(read_nir(out).metadata["radarsnn_dt_s"]) == 0.5
+
+
+def test_import_nir_writes_artifacts_that_run_like_the_exported_ones(chain, tmp_path, capsys):
+    pytest.importorskip("nir")
+    from backends import load
+    from backends.reference import run_program, simulate
+
+    path, frames = chain
+    assert main(["compile", str(path), "-c", str(frames), "-o", str(tmp_path / "art"), "-q"]) == 0
+    assert main(["export-nir", str(tmp_path / "art"), "-o", str(tmp_path / "all.nir"), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["import-nir", str(tmp_path / "all.nir"), "-o", str(tmp_path / "back"),
+                 "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["artifacts"]
+    program = load(tmp_path / "art")
+    result = run_program(program, {"x": np.load(frames)[2]})
+    spiking = [s.network for s in program.segments if s.kind == "spiking"]
+    assert [r["artifact"] for r in rows] == [str(tmp_path / "back" / f"n{k}")
+                                             for k in range(len(spiking))]
+    for row, sim in zip(rows, result.simulations, strict=True):
+        net = load(row["artifact"])
+        again = simulate(net, {e.node or e.port: result.values[e.node or e.port]
+                               for e in net.encoders})
+        for port, value in sim.outputs.items():
+            np.testing.assert_array_equal(again.outputs[port], value)
+    bad = tmp_path / "bad.nir"
+    bad.write_bytes(b"\x89HDF\r\n")
+    assert main(["import-nir", str(bad), "-o", str(tmp_path / "x")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: NIR file") and "\n" not in err
+
+
+def test_import_nir_reads_another_tools_graph_with_its_step(tmp_path, capsys):
+    nir = pytest.importorskip("nir")
+    from backends import load
+
+    graph = nir.NIRGraph.from_list(nir.Linear(weight=np.full((2, 3), 0.5)),
+                                   nir.IF(r=np.full(2, 1e3), v_threshold=np.ones(2),
+                                          v_reset=np.zeros(2)))
+    nir.write(tmp_path / "other.nir", graph)
+    assert main(["import-nir", str(tmp_path / "other.nir"), "-o", str(tmp_path / "x")]) == 1
+    assert "pass dt_s (--dt-s)" in capsys.readouterr().err
+    assert main(["import-nir", str(tmp_path / "other.nir"), "-o", str(tmp_path / "net"),
+                 "--dt-s", "1e-3", "--n-steps", "16", "-q"]) == 0
+    net = load(tmp_path / "net")
+    assert net.n_steps == 16 and net.projections[0].weights.tolist() == [[0.5, 0.5]] * 3

@@ -243,8 +243,24 @@ def test_program_export_names_trace_to_ir_nodes() -> None:
         export_program(program, stages=["nope"])
 
 
+def test_over_max_weights_a_projection_is_one_compact_node() -> None:
+    """No dense blow-up: the shared block of a repeated matrix as one Linear, a stencil as an
+    empty Linear with its kernel in metadata; both reported outside NIR."""
+    graph, report = export_network(_zoo(), max_weights=9)
+    shared = graph.nodes["c.w.compact"]  # 3 x 3 shared by 2 repetitions (6 x 6 dense)
+    np.testing.assert_array_equal(shared.weight, _zoo().projection["c/w"].weights.T)
+    assert shared.metadata["radarsnn_weight_field"] == "weights"
+    stencil = graph.nodes["d.k.compact"]
+    assert stencil.weight.shape == (0, 0)
+    np.testing.assert_array_equal(stencil.metadata["radarsnn_array_kernel"], [0.5, -0.25, 1.0])
+    outside = {e.item for e in report.outside if e.aspect == "weights"}
+    assert {"c/w", "d/k"} <= outside and not report.is_exact
+    assert ("x.in", "c.w.compact") in graph.edges and ("c.w.compact", "c.ramp.syn") in graph.edges
+    # e/if's constant bias rides on an Affine only when its projection is written dense
+    assert type(graph.nodes["e.w.compact"]).__name__ == "Linear"
+    assert ("e/if", "bias", "outside") in {(e.item, e.aspect, e.kind) for e in report.entries}
+
+
 def test_errors_name_the_projection() -> None:
-    with pytest.raises(ArtifactError, match="a/w.*max_weights"):
-        export_network(_zoo(), max_weights=4)
     with pytest.raises(ArtifactError, match="dt_s"):
         export_network(_zoo(), dt_s=0.0)

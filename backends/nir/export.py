@@ -12,9 +12,14 @@ every name traces to its IR node, also stored as ``radarsnn_node``):
 * a projection → one ``Linear`` per delay class ``d`` (``<proj>.d<d>``) with
   the block-diagonal weights of every repetition (stencils expanded), preceded
   by a ``Delay`` of ``d·dt`` when ``d > 0`` (``<proj>.delay<d>``); an ``Affine``
-  when it carries the target's constant bias;
+  when it carries the target's constant bias; over ``max_weights`` dense
+  entries, one compact ``<proj>.compact`` node (:mod:`backends.nir.entries`);
 * a decoder → an ``Output`` ``<port>.output`` fed by the population's spikes; the
   readout runs outside (``radarsnn_decoder``).
+
+Every population and projection node also carries its artifact entry
+(:mod:`backends.nir.entries`), so :func:`backends.nir.import_nir` rebuilds the
+network exactly.
 
 NIR sums the inputs of a node with several incoming edges, as our currents add.
 Synapses come from the Brian2 expanders (a table keyed by projection type); how a
@@ -55,6 +60,13 @@ import numpy as np
 
 from backends.atomic import check_output, write_atomic_files
 from backends.brian2.synapses import dense_weights, expand_projection
+from backends.nir.entries import (
+    ROUND_TRIP_VERSION,
+    compact_node,
+    network_entry,
+    population_meta,
+    projection_meta,
+)
 from backends.nir.neurons import bias_of, neuron_nodes, origin_node, scaled_bias
 from backends.nir.report import ExportReport
 from compiler.program import CompiledProgram
@@ -107,8 +119,9 @@ def _put(nodes: dict, name: str, node: nir.NIRNode, item: str) -> None:
     nodes[name] = node
 
 
-def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportReport,
-                 dt_s: float, prefix: str, max_weights: int) -> None:
+def _add_network(net: SpikingNetwork, k: int, nodes: dict, edges: list, report: ExportReport,
+                 dt_s: float, prefix: str, max_weights: int) -> bool:
+    """Add ``net`` (network number ``k``) to ``nodes``/``edges``; True if a node is compact."""
     net.validate()
     pops = net.population
     for pop in net.populations:
@@ -123,17 +136,17 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
     for proj in net.projections:
         tgt = pops[proj.target].params
         b = bias_of(pops[proj.target])
-        if (b and tgt.dv == 0 and tgt.du == 1.0 and proj.target not in affine_bias):
+        dense = pops[proj.source].size * pops[proj.target].size <= max_weights  # not compact
+        if (b and dense and tgt.dv == 0 and tgt.du == 1.0 and proj.target not in affine_bias):
             affine_bias[proj.target] = proj.id
-    for pop in net.populations:
+    for index, pop in enumerate(net.populations):
         name = nir_name(pop.id, prefix)
         if pop.source:
             enc = encoders[pop.id]
+            meta = _meta(population=pop.id, node=enc.node or origin_node(pop.id, pop.origin),
+                         shape=pop.shape, encoder=enc.model_dump(mode="json"))
             _put(nodes, name, nir.Input(input_type={"input": np.array([pop.size])},
-                                    metadata=_meta(population=pop.id,
-                                                   node=enc.node or origin_node(pop.id, pop.origin),
-                                                   shape=pop.shape,
-                                                   encoder=enc.model_dump(mode="json"))),
+                                        metadata={**meta, **population_meta(pop, index, k)}),
                  pop.id)
             report.add(pop.id, "encoder", "outside",
                        f"{enc.code.type} code of port {enc.port!r} (split {enc.split}) turns "
@@ -143,24 +156,33 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
             new, entry[pop.id], exit_[pop.id] = neuron_nodes(
                 pop, name, dt_s, report, bias_elsewhere=pop.id in affine_bias)
             new[name].metadata["radarsnn_shape"] = json.dumps(pop.shape)
+            new[name].metadata.update(population_meta(pop, index, k))
             edges += list(zip(list(new)[:-1], list(new)[1:], strict=True))
             for key, node in new.items():
                 _put(nodes, key, node, pop.id)
         report.nodes[name] = pop.id
-    for proj in net.projections:
+    compact = False
+    for index, proj in enumerate(net.projections):
         src, tgt = pops[proj.source], pops[proj.target]
         if src.size * tgt.size > max_weights:
-            raise ArtifactError(
-                f"projection {proj.id!r}: its dense NIR Linear would have {src.size} x "
-                f"{tgt.size} = {src.size * tgt.size} entries, over max_weights={max_weights}; "
-                "export fewer repetitions (a smaller chain or chosen stages) or raise "
-                "max_weights", node=proj.id)
+            compact = True
+            node, how = compact_node(proj, src, tgt, max_weights)
+            name = nir_name(f"{proj.id}.compact", prefix)
+            node.metadata = {**_meta(projection=proj.id, node=origin_node(proj.id, proj.origin)),
+                             **projection_meta(proj, index, k, node.weight)}
+            _put(nodes, name, node, proj.id)
+            edges += [(exit_[proj.source], name), (name, entry[proj.target])]
+            report.nodes[name] = proj.id
+            report.add(proj.id, "weights", "outside", how)
+            continue
         syn = expand_projection(proj, src, tgt)
         delays = [int(d) for d in np.unique(syn.delay)] or [0]
         for d in delays:
             w = dense_weights(syn, src.size, tgt.size, delay=d)
             lin = nir_name(f"{proj.id}.d{d}", prefix)
             meta = _meta(projection=proj.id, node=origin_node(proj.id, proj.origin), delay_steps=d)
+            if d == delays[0]:
+                meta.update(projection_meta(proj, index, k, w))
             if affine_bias.get(proj.target) == proj.id and d == delays[0]:
                 bias = scaled_bias(tgt)
                 _put(nodes, lin, nir.Affine(weight=w, bias=bias, metadata=meta), proj.id)
@@ -194,6 +216,7 @@ def _add_network(net: SpikingNetwork, nodes: dict, edges: list, report: ExportRe
                    f"{dec.kind} readout of {dec.population} (combine {dec.combine}) runs after "
                    f"the graph on the spikes of Output {name}")
         report.nodes[name] = dec.port
+    return compact
 
 
 def export_network(
@@ -208,7 +231,9 @@ def export_network(
     dt_s : float
         Duration of one step, the ``dt`` of the NIR time constants and delays.
     max_weights : int
-        Refuse a projection whose dense ``Linear`` exceeds this many entries.
+        A projection whose dense ``Linear`` would exceed this many entries is written
+        compact (:func:`backends.nir.entries.compact_node`; the graph then needs
+        ``type_check=False`` in ``nir.read``).
 
     Returns
     -------
@@ -221,14 +246,14 @@ def export_network(
     NetworkError
         If the network does not validate.
     ArtifactError
-        For a projection over ``max_weights``.
+        For a projection array over the 2^24 entries a NIR file may hold per dataset.
     """
     return _export([network], [], dt_s, max_weights, name=network.name)
 
 
 def export_program(
-    program: CompiledProgram, *, stages: Iterable[str] | None = None, dt_s: float = 1.0,
-    max_weights: int = MAX_WEIGHTS
+    program: CompiledProgram, *, stages: Iterable[str] | None = None,
+    dt_s: float | None = None, max_weights: int = MAX_WEIGHTS
 ) -> tuple[nir.NIRGraph, ExportReport]:
     """Export a compiled program's spiking networks (or the chosen stages) to one NIR graph.
 
@@ -238,7 +263,10 @@ def export_program(
         The compiled chain.
     stages : iterable of str, optional
         IR node ids; only networks with a population of one of these nodes are exported.
-    dt_s, max_weights
+    dt_s : float, optional
+        Duration of one step; default the target profile's ``time_step_s`` (1 s for a
+        program compiled without a target or a profile without one).
+    max_weights : int
         As for :func:`export_network`.
 
     Returns
@@ -250,7 +278,7 @@ def export_program(
     Raises
     ------
     ArtifactError
-        If no spiking network matches, or a projection is over ``max_weights``.
+        If no spiking network matches, or a projection array is over 2^24 entries.
     """
     wanted = None if stages is None else set(stages)
     nets, host = [], []
@@ -264,26 +292,32 @@ def export_program(
         raise ArtifactError(f"program {program.graph.name!r}: no spiking network to export "
                             f"(stages {sorted(wanted) if wanted else 'all'}); choose IR nodes "
                             "that were lowered to spikes")
+    if dt_s is None:
+        dt_s = float(getattr(program.target, "time_step_s", None) or 1.0)
     return _export(nets, host, dt_s, max_weights, name=program.graph.name)
 
 
 def _export(nets: list[SpikingNetwork], host: list[str], dt_s: float, max_weights: int,
             name: str) -> tuple[nir.NIRGraph, ExportReport]:
+    """The NIR graph and report of ``nets`` (``n<k>.``-prefixed when several)."""
     if not (np.isfinite(dt_s) and dt_s > 0):
         raise ArtifactError(f"NIR export of {name!r}: dt_s must be a positive number of "
                             f"seconds, got {dt_s}")
     nodes: dict[str, nir.NIRNode] = {}
     edges: list[tuple[str, str]] = []
     report = ExportReport()
+    compact = False
     for k, net in enumerate(nets):
-        _add_network(net, nodes, edges, report, dt_s, f"n{k}." if len(nets) > 1 else "",
-                     max_weights)
+        compact |= _add_network(net, k, nodes, edges, report, dt_s,
+                                f"n{k}." if len(nets) > 1 else "", max_weights)
     for node in host:
         report.add(node, "host segment", "outside",
                    "evaluated on the host, outside the spiking networks")
     meta = _meta(dt_s=dt_s, convention=CONVENTION, name=name,
-                 networks=[n.name for n in nets], n_steps=[n.n_steps for n in nets])
-    return nir.NIRGraph(nodes=nodes, edges=edges, metadata=meta), report
+                 networks=[n.name for n in nets], n_steps=[n.n_steps for n in nets],
+                 artifacts=[network_entry(n) for n in nets], round_trip=ROUND_TRIP_VERSION,
+                 max_weights=max_weights)
+    return nir.NIRGraph(nodes=nodes, edges=edges, metadata=meta, type_check=not compact), report
 
 
 def write_nir(graph: nir.NIRGraph, report: ExportReport, path: str | Path) -> ExportReport:

@@ -48,6 +48,7 @@ import nir
 import numpy as np
 
 from backends.atomic import check_output, write_atomic
+from backends.nir.reading import read_nir
 from ir.errors import ArtifactError, IRError
 from ir.ops.classify import LIF, Classifier, Conv2d, Dense, Integrator, Pool, Recurrent
 
@@ -58,8 +59,14 @@ _READOUT = (nir.LI, nir.I, nir.CubaLI)
 
 
 def read_graph(path: str | Path) -> nir.NIRGraph:
-    """Read a NIR file with the real ``nir`` package (HDF5; no code is executed)."""
-    return nir.read(path)
+    """Read a NIR file within bounds (:func:`backends.nir.reading.read_nir`; no code runs).
+
+    Raises
+    ------
+    ArtifactError
+        Naming the file, the HDF5 node path and the limit (docs/reliability.md).
+    """
+    return read_nir(path)
 
 
 def _fail(name: str, message: str) -> IRError:
@@ -154,7 +161,7 @@ def import_classifier(
     Parameters
     ----------
     graph : nir.NIRGraph or path
-        The graph, or a ``.nir`` file read with :func:`nir.read`.
+        The graph, or a ``.nir`` file read with :func:`read_graph` (bounded).
     weights_path : path
         Where the weights ``.npz`` is written, atomically (keys ``layers.<i>.weight`` /
         ``.recurrent``); the op's ``weights`` field names it.
@@ -176,12 +183,17 @@ def import_classifier(
     Raises
     ------
     IRError
-        Naming the NIR node that has no classifier form.
+        Naming the NIR node that has no classifier form, or for a graph radarsnn exported
+        (read those with :func:`backends.nir.import_nir`).
     ArtifactError
         ``weights_path`` is no place for a file (a device, a folder), or cannot be written.
     """
     if not isinstance(graph, nir.NIRGraph):
         graph = read_graph(graph)
+    if isinstance(graph.metadata, dict) and "radarsnn_round_trip" in graph.metadata:
+        raise IRError("NIR graph: exported by radarsnn (metadata radarsnn_round_trip); read it "
+                      "back with backends.nir.import_nir (radarsnn import-nir), which restores "
+                      "its spiking networks exactly, not as a classifier op")
     meta_dt = graph.metadata.get("radarsnn_dt_s") if isinstance(graph.metadata, dict) else None
     dt = float(meta_dt.decode() if isinstance(meta_dt, bytes) else meta_dt) if meta_dt else dt_s
     chain, loops = _chain(graph)

@@ -5,6 +5,7 @@ function, collected explicitly in :data:`COMMAND_MODULES`:
 
 * :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
 * :mod:`compiler.cli.run` — ``run``; :mod:`compiler.cli.export_nir` — ``export-nir``;
+  :mod:`compiler.cli.import_nir` — ``import-nir``;
 * :mod:`compiler.cli.demo` — ``demo``, ``bench``;
 * :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
   (Dask is imported only when a sweep runs).
@@ -54,7 +55,8 @@ LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
 COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
-                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir")
+                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
+                   "compiler.cli.import_nir")
 
 
 def _version() -> str:

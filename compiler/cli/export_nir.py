@@ -1,7 +1,8 @@
 """The ``radarsnn export-nir`` sub-command: a chain or a compiled artifact as a NIR file.
 
 ``radarsnn export-nir CHAIN_OR_PROGRAM -o OUT.nir [--target T] [-c [NODE=]X.npy]
-[--stage NODE]… [--dt-s S]`` — a program folder (``radarsnn compile``) or a network
+[--stage NODE]… [--dt-s S]`` (``S`` defaults to the target profile's
+``time_step_s``) — a program folder (``radarsnn compile``) or a network
 artifact is exported as it is; a chain file is compiled first, like ``radarsnn
 report`` (for ``--target``, default ``loihi2``; on ``-c`` inputs or synthetic
 noise).  The graph is written with :func:`backends.nir.write_nir`, the export
@@ -21,15 +22,15 @@ from ir.errors import RadarSNNError
 __all__ = ["add_parsers", "export_nir"]
 
 #: What a missing ``nir`` package is told (the extra of pyproject.toml).
-NEEDS_NIR = "radarsnn export-nir needs the nir package: pip install 'radarsnn[nir]'"
+NEEDS_NIR = "radarsnn {command} needs the nir package: pip install 'radarsnn[nir]'"
 
 
-def _require_nir() -> None:
-    """Import ``nir`` (and the exporter) or raise a one-line :class:`RadarSNNError`."""
+def _require_nir(command: str = "export-nir") -> None:
+    """Import ``nir`` or raise a one-line :class:`RadarSNNError` naming ``command``."""
     try:
         import nir  # noqa: F401
     except ImportError:
-        raise RadarSNNError(NEEDS_NIR) from None
+        raise RadarSNNError(NEEDS_NIR.format(command=command)) from None
 
 
 def _chain_only(args: argparse.Namespace) -> None:
@@ -41,6 +42,11 @@ def _chain_only(args: argparse.Namespace) -> None:
     if given:
         raise RadarSNNError(f"{args.chain} is already compiled: {', '.join(given)} apply to a "
                             "chain file only (export the chain file to compile it again)")
+
+
+def _profile_step_s(profile) -> float:
+    """The profile's ``time_step_s`` (one step of the chip), else 1 s."""
+    return float(getattr(profile, "time_step_s", None) or 1.0)
 
 
 def export_nir(args: argparse.Namespace):
@@ -90,7 +96,10 @@ def export_nir(args: argparse.Namespace):
             if args.stage:
                 raise RadarSNNError(f"{source} is a single-network artifact: --stage selects "
                                     "the networks of a compiled program, drop it")
-            graph, report = export_network(loaded, dt_s=args.dt_s)
+            from compiler.hardware import load_profile
+
+            dt_s = args.dt_s or _profile_step_s(load_profile(args.target or "loihi2"))
+            graph, report = export_network(loaded, dt_s=dt_s)
             note = "a network artifact"
         else:
             stored = getattr(loaded.target, "name", None)
@@ -98,11 +107,13 @@ def export_nir(args: argparse.Namespace):
                 raise RadarSNNError(f"{source} was compiled for {stored or 'no target'}, not "
                                     f"{args.target}: export the chain file instead "
                                     f"(radarsnn export-nir CHAIN.yaml --target {args.target})")
-            graph, report = export_program(loaded, stages=args.stage, dt_s=args.dt_s)
+            graph, report = export_program(loaded, stages=args.stage,
+                                           dt_s=args.dt_s or _profile_step_s(loaded.target))
             note = artifact_note(source)
     else:
         program, note = _compile(args, args.target or "loihi2")
-        graph, report = export_program(program, stages=args.stage, dt_s=args.dt_s)
+        graph, report = export_program(program, stages=args.stage,
+                                       dt_s=args.dt_s or _profile_step_s(program.target))
     write_nir(graph, report, path)
     return path, graph, report, note
 
@@ -130,7 +141,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
     >>> p = add_parsers(parser.add_subparsers(dest="command"))
     >>> args = parser.parse_args(["export-nir", "chain.yaml", "-o", "out.nir", "--stage", "det"])
     >>> args.output, args.target, args.stage, args.dt_s
-    ('out.nir', None, ['det'], 1.0)
+    ('out.nir', None, ['det'], None)
     """
     p = subparsers.add_parser("export-nir", help="write a chain's (or a compiled artifact's) "
                                                  "spiking networks as a NIR graph (nir extra)")
@@ -144,8 +155,9 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
                         "keeps its own)")
     p.add_argument("--stage", "-s", action="append", metavar="NODE",
                    help="export only the spiking networks of this IR node (repeatable)")
-    p.add_argument("--dt-s", type=float, default=1.0, metavar="SECONDS",
-                   help="duration of one step, the dt of the NIR time constants (default 1)")
+    p.add_argument("--dt-s", type=float, default=None, metavar="SECONDS",
+                   help="duration of one step, the dt of the NIR time constants (default: the "
+                        "target profile's time_step_s, 1e-05 for loihi2; 1 without one)")
     p.add_argument("--calibration", "-c", action="append", metavar="[NODE=]X.npy",
                    help="calibration input per input node of a chain (default: seeded "
                         "synthetic noise, see docs/cli.md)")
