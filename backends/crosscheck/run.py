@@ -13,7 +13,7 @@ from __future__ import annotations
 import subprocess
 import tempfile
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,10 +21,11 @@ import numpy as np
 from backends.artifact import save
 from backends.crosscheck.env import CrosscheckEnvError, env_python
 from backends.reference import SimResult, simulate
-from compiler.snn import SpikingNetwork
+from compiler.snn import Decoder, SpikingNetwork
 from ir.errors import SimulationError
 
-__all__ = ["WORKERS", "ChipRun", "PopulationMatch", "compare", "reference_run",
+__all__ = ["WORKERS", "ChipRun", "PopulationMatch", "compare", "membrane_difference",
+           "reference_run",
            "run_chip_model", "run_saved"]
 
 #: The worker script of each model, beside this package.
@@ -66,9 +67,26 @@ class PopulationMatch:
 
 
 def reference_run(network: SpikingNetwork, inputs: Mapping[str, np.ndarray]) -> SimResult:
-    """The reference step engine in int64 with every raster recorded."""
-    return simulate(network, inputs, mode="step", arithmetic="int64", record_spikes=True,
+    """The reference step engine in int64 with every raster recorded, and each neuron
+    population's membrane after the last step as output ``v:<population>``."""
+    extra = [Decoder(port=f"v:{p.id}", population=p.id, kind="membrane")
+             for p in network.populations if not p.source]
+    probed = replace(network, decoders=[*network.decoders, *extra])
+    return simulate(probed, inputs, mode="step", arithmetic="int64", record_spikes=True,
                     out_of_range="clip")
+
+
+def membrane_difference(network: SpikingNetwork, reference: SimResult,
+                        chip: ChipRun) -> dict[str, float]:
+    """Per neuron population, ``max |v_chip / S − v_ref|`` after the last step, state units."""
+    out = {}
+    for pop in network.populations:
+        if pop.source or pop.id not in chip.v_raw:
+            continue
+        ref = reference.outputs[f"v:{pop.id}"].reshape(reference.n_frames, -1)
+        got = chip.v_raw[pop.id][:, -1, :] / chip.scale[pop.id]
+        out[pop.id] = float(np.abs(got - ref).max(initial=0.0))
+    return out
 
 
 def run_saved(model: str, artifact: Path, rasters: Mapping[str, np.ndarray],

@@ -54,7 +54,8 @@ LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
 COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
-                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir")
+                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
+                   "backends.crosscheck.command")
 
 
 def _version() -> str:
