@@ -1,10 +1,11 @@
 r"""A saved network in Loihi's integer formats, read from the artifact alone (numpy + json).
 
-This module is the shared half of the two cross-check workers (``backends/lava/worker.py``,
-``backends/nengo_loihi/worker.py``).  They run in another Python (3.10, numpy 1.26), so it
-imports nothing of radarsnn: it reads ``manifest.json`` and ``arrays.npz``
-(``np.load(allow_pickle=False)``) and re-derives every synapse and every register value
-from the number format that ``docs/hardware.md`` documents for the ``loihi`` profile:
+This module is the shared half of the two cross-check workers
+(``backends/lava/lava_worker.py``, ``backends/nengo_loihi/emulator_worker.py``). They run in
+another Python (3.10, numpy 1.26), so it imports nothing of radarsnn: it reads
+``manifest.json`` and ``arrays.npz`` (``np.load(allow_pickle=False)``) and re-derives every
+synapse and every register value from the number format that ``docs/hardware.md`` documents
+for the ``loihi`` profile:
 
 * one radarsnn **state unit** of a population is :math:`S_T = 2^6` raw LSBs of the chip's
   24-bit ``u``/``v`` (the synaptic input is shifted left by 6, ``act_shift``) — or
@@ -304,7 +305,7 @@ def _population(pid: str, p: dict, scale: int, n_steps: int, notes: list[str]) -
         raise NotExpressible(f"population {pid!r}: dv = 1 (12-bit dv stops at 4095)")
     segs = []
     starts = [ph["start_step"] for ph in q["phases"]] + [n_steps]
-    for ph, start, stop in zip(q["phases"], starts, starts[1:]):
+    for ph, start, stop in zip(q["phases"], starts, starts[1:], strict=False):
         if start >= n_steps:
             break
         mant, exp = bias_register(scale * ph["bias"])

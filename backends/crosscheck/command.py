@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +48,7 @@ def random_inputs(network, frames: int, seed: int) -> dict[str, np.ndarray]:
 def crosscheck(args: argparse.Namespace) -> list[dict]:
     """Run what ``args`` names; one row per (network, population)."""
     from backends import load
+    from backends.artifact import save
     from backends.crosscheck.env import build_env, env_python
     from backends.crosscheck.run import compare, reference_run, run_saved
     from compiler.program import CompiledProgram
@@ -56,9 +58,6 @@ def crosscheck(args: argparse.Namespace) -> list[dict]:
     networks = obj.networks if isinstance(obj, CompiledProgram) else [obj]
     given = dict(np.load(args.inputs, allow_pickle=False)) if args.inputs else None
     rows = []
-    import tempfile
-
-    from backends.artifact import save
     for net in networks:
         inputs = given if given is not None else random_inputs(net, args.frames, args.seed)
         ref = reference_run(net, inputs)

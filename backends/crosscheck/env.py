@@ -31,7 +31,8 @@ PACKAGES: tuple[str, ...] = ("numpy==1.26.4", "networkx==2.8.7", "lava-nc==0.10.
                              "nengo==4.1.0", "nengo-loihi==1.1.0")
 #: Longest a build may take, s (a fresh build from the package index takes ≈ 20–60 s).
 BUILD_TIMEOUT_S = 600.0
-_PROBE = "import lava.proc.lif.models, nengo_loihi.emulator.interface, numpy; print(numpy.__version__)"
+_PROBE = ("import lava.proc.lif.models, nengo_loihi.emulator.interface, numpy; "
+          "print(numpy.__version__)")
 
 
 class CrosscheckEnvError(RadarSNNError):
@@ -45,13 +46,21 @@ def default_env_dir() -> Path:
 
 
 def find_python310() -> Path | None:
-    """A Python 3.10 interpreter: ``python3.10`` on ``PATH``, else the newest pyenv 3.10.x."""
-    found = shutil.which("python3.10")
-    if found:
-        return Path(found)
+    """A working Python 3.10: the newest pyenv 3.10.x, else ``python3.10`` on ``PATH``
+    (each is run once; a pyenv shim with no 3.10 behind it does not count)."""
     root = Path(os.environ.get("PYENV_ROOT", Path.home() / ".pyenv")) / "versions"
     candidates = sorted(root.glob("3.10.*/bin/python"), key=lambda p: p.parent.parent.name)
-    return candidates[-1] if candidates else None
+    on_path = shutil.which("python3.10")
+    for python in [*reversed(candidates), *([Path(on_path)] if on_path else [])]:
+        try:
+            probe = subprocess.run([str(python), "-c", "import sys, venv; print(sys.version_info"
+                                    "[:2])"], capture_output=True, text=True, timeout=60,
+                                   check=False)
+        except OSError:
+            continue
+        if probe.returncode == 0 and probe.stdout.strip() == "(3, 10)":
+            return python
+    return None
 
 
 def env_python(env_dir: Path | None = None) -> Path | None:

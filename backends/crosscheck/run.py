@@ -30,8 +30,8 @@ __all__ = ["WORKERS", "ChipRun", "PopulationMatch", "compare", "membrane_differe
 
 #: The worker script of each model, beside this package.
 WORKERS: dict[str, Path] = {
-    "lava": Path(__file__).resolve().parents[1] / "lava" / "worker.py",
-    "nengo-loihi": Path(__file__).resolve().parents[1] / "nengo_loihi" / "worker.py",
+    "lava": Path(__file__).resolve().parents[1] / "lava" / "lava_worker.py",
+    "nengo-loihi": Path(__file__).resolve().parents[1] / "nengo_loihi" / "emulator_worker.py",
 }
 #: Longest one worker run may take, s.
 WORKER_TIMEOUT_S = 900.0

@@ -1,6 +1,6 @@
 """Run a saved radarsnn network in Lava's bit-accurate fixed-point processes (Python 3.10 side).
 
-``python worker.py ARTIFACT INPUTS.npz OUT.npz`` — started by :mod:`backends.lava` in the
+``python lava_worker.py ARTIFACT INPUTS.npz OUT.npz`` — started by :mod:`backends.lava` in the
 cross-check environment (Lava 0.10, numpy 1.26).  It imports nothing of radarsnn: the
 network comes from the artifact (:mod:`backends.crosscheck.chipnet`, loaded from its file),
 the source spike rasters from ``INPUTS.npz`` (``src:<population>``, bool
@@ -38,7 +38,7 @@ def run(artifact: str, inputs_path: str, out_path: str) -> None:
         return
     from lava.magma.core.run_conditions import RunSteps
     from lava.magma.core.run_configs import Loihi2SimCfg
-    from lava.proc.dense.process import Dense, DelayDense
+    from lava.proc.dense.process import DelayDense, Dense
     from lava.proc.io.source import RingBuffer
     from lava.proc.lif.process import LIF
     from lava.proc.monitor.process import Monitor

@@ -1,18 +1,18 @@
 """Run a saved radarsnn network in NengoLoihi 1.1's Loihi emulator (Python 3.10 side).
 
-``python worker.py ARTIFACT INPUTS.npz OUT.npz`` — started by :mod:`backends.nengo_loihi` in
-the cross-check environment.  It imports nothing of radarsnn: the network comes from the
-artifact (:mod:`backends.crosscheck.chipnet`, loaded from its file), the source spike
-rasters from ``INPUTS.npz``.  Each population is a ``LoihiBlock`` whose compartments hold
-the integer registers (``decay_u``, ``decay_v``, ``vth = vth_man << 6``, ``bias``,
-``vmin``/``vmax = ∓(2^23 − 1)``); each synapse group a ``Synapse`` whose weights go
-through NengoLoihi's own ``discretize_weights`` with its ``SynapseConfig`` (weight
-exponent, mixed or one-sign fan-out); sources are ``SpikeInput`` s.  The
-``EmulatorInterface`` steps it (int32 arithmetic: ``decay_int(u, decay_u, offset=1)``,
-``v > vth``, reset to 0) with the host writes of :mod:`backends.crosscheck.frames`
-between steps.  The emulator has no synaptic delays (``CompartmentState.MAX_DELAY = 1``):
-a source's delays become one ``SpikeInput`` per delay value, a delay between neurons is
-refused.  Output as :mod:`backends.lava.worker`.
+``python emulator_worker.py ARTIFACT INPUTS.npz OUT.npz`` — started by
+:mod:`backends.nengo_loihi` in the cross-check environment. It imports nothing of radarsnn:
+the network comes from the artifact (:mod:`backends.crosscheck.chipnet`, loaded from its
+file), the source spike rasters from ``INPUTS.npz``. Each population is a ``LoihiBlock``
+whose compartments hold the integer registers (``decay_u``, ``decay_v``, ``vth = vth_man <<
+6``, ``bias``, ``vmin``/``vmax = ∓(2^23 − 1)``); each synapse group a ``Synapse`` whose
+weights go through NengoLoihi's own ``discretize_weights`` with its ``SynapseConfig``
+(weight exponent, mixed or one-sign fan-out); sources are ``SpikeInput`` s. The
+``EmulatorInterface`` steps it (int32 arithmetic: ``decay_int(u, decay_u, offset=1)``, ``v >
+vth``, reset to 0) with the host writes of :mod:`backends.crosscheck.frames` between steps.
+The emulator has no synaptic delays (``CompartmentState.MAX_DELAY = 1``): a source's delays
+become one ``SpikeInput`` per delay value, a delay between neurons is
+refused.  Output as :mod:`backends.lava.lava_worker`.
 """
 
 from __future__ import annotations
