@@ -323,7 +323,10 @@ def _population(pid: str, p: dict, scale: int, n_steps: int, notes: list[str]) -
 
 
 def _set_lags(out: dict, pops: dict, expanded: list) -> None:
-    """Each population's lag: one step more than its latest source (sources: 0)."""
+    """Each population's lag: one step more than its latest source (sources: 0), at least 1
+    (so that every host write comes after the first chip step)."""
+    for pop in out.values():
+        pop.lag = 1
     for _ in range(len(out) + 1):
         changed = False
         for entry, *_ in expanded:
