@@ -137,3 +137,20 @@ def test_subtractive_reset_differs_on_the_chip() -> None:
     (match,) = compare(net, ref, chip)
     assert not match.exact
     assert any("subtractive reset" in n for n in chip.notes)
+
+
+def test_cli_crosscheck_saved_network(tmp_path, capsys) -> None:
+    """`radarsnn crosscheck ARTIFACT --with nengo-loihi --inputs X.npz`: exit 0, rows exact."""
+    import json
+
+    from backends import save
+    from compiler.cli import main
+
+    net, maps = _cfar("os")
+    folder = save(net, tmp_path / "net")
+    np.savez(tmp_path / "x.npz", x=maps)
+    code = main(["crosscheck", str(folder), "--with", "nengo-loihi", "--inputs",
+                 str(tmp_path / "x.npz"), "--json"])
+    rows = json.loads(capsys.readouterr().out)
+    assert code == 0 and rows[0]["population"] == "det/det" and rows[0]["exact"]
+    assert rows[0]["spikes_reference"] > 20

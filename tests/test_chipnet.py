@@ -113,3 +113,20 @@ def test_environment_pins() -> None:
     assert "lava-nc==0.10.0" in PACKAGES and "numpy==1.26.4" in PACKAGES
     found = find_python310()
     assert found is None or found.exists()
+
+
+def test_missing_environment_says_how_to_build_it(tmp_path, monkeypatch) -> None:
+    from backends.crosscheck.env import CrosscheckEnvError
+    from backends.crosscheck.run import run_saved
+
+    monkeypatch.setenv("RADARSNN_CROSSCHECK_ENV", str(tmp_path / "none"))
+    with pytest.raises(CrosscheckEnvError, match="--build-env"):
+        run_saved("lava", tmp_path, {})
+
+
+def test_unknown_model_is_refused(tmp_path) -> None:
+    from backends.crosscheck.run import run_saved
+    from ir.errors import SimulationError
+
+    with pytest.raises(SimulationError, match="unknown chip model 'spinnaker'"):
+        run_saved("spinnaker", tmp_path, {})
