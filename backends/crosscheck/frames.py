@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["frame_period", "host_writes", "source_raster"]
+__all__ = ["aligned", "decided", "frame_period", "host_writes", "source_raster"]
 
 
 def frame_period(n_steps: int, max_lag: int, max_delay: int) -> int:
