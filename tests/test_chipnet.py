@@ -89,6 +89,7 @@ def test_registers_lags_and_delays_from_the_artifact(tmp_path) -> None:
     b, c = net.populations["b"], net.populations["c"]
     assert (b.du, b.dv, b.vth, b.scale, b.lag) == (4095, 1024, 4, 64, 1)
     assert (b.segments[0]["bias_mant"], b.segments[0]["bias_exp"]) == (128, 0)
+    assert any("truncates in LSBs" in n for n in net.notes)  # dv = 1/4 on 64-LSB units
     assert c.lag == 2
     ab, bc = net.projections
     assert ab.weights.tolist() == [[2, -4]] and ab.weight_exp == -1

@@ -301,6 +301,9 @@ def _population(pid: str, p: dict, scale: int, n_steps: int, notes: list[str]) -
     leaky = du_units == 0
     if leaky:
         notes.append(f"{pid}: du = 0 (non-leaking current) leaks 1/4096 per step on the chip")
+    if scale != 1 and (0 < du_units < 4096 or dv_units > 0):
+        notes.append(f"{pid}: a decay on 64-LSB state units: the chip truncates in LSBs, "
+                     "radarsnn in units (quantize in raw LSBs, weights x64, to be exact)")
     if dv_units == 4096:
         raise NotExpressible(f"population {pid!r}: dv = 1 (12-bit dv stops at 4095)")
     segs = []
