@@ -63,18 +63,17 @@ def test_unbounded_changes_nothing():
 
 
 def test_threshold_beyond_its_range_coarsens_the_weights():
-    # loihi thresholds: a 17-bit mantissa << 6, at most 8 388 544 state units.  v_th = 2e4
-    # at weight 0.3: the unit grows from 0.3/127 to 2e4/8388543.5, the weight 0.3 -> 126
-    net, rec = quantize(small(np.array([[0.3]]), v_th=2e4), load_profile("loihi"))
+    # loihi thresholds: a 17-bit vth in 64-LSB state units, at most 131 071.  v_th = 400 at
+    # weight 0.3: the unit grows from 0.3/127 to 400/131070.5, the weight 0.3 -> 98
+    net, rec = quantize(small(np.array([[0.3]]), v_th=400.0), load_profile("loihi"))
     info = rec.populations[net.populations[1].id]
     assert info["weights_coarsened_for_threshold"] and not info["exact"]
     assert net.populations[1].params.v_th <= load_profile("loihi").threshold_max
-    assert net.projections[0].weights[0, 0] == 126.0  # rint(0.3 / (2e4 / 8388543.5))
+    assert net.projections[0].weights[0, 0] == 98.0  # rint(0.3 / (400 / 131070.5))
 
 
 def test_whole_weights_and_thresholds_stay_exact_on_loihi():
-    # weight 1, v_th = 1e4: the old 17-bit integer limit coarsened this to weight 7; Loihi's
-    # threshold is a 17-bit mantissa << 6 in a 24-bit state, so it is stored as it is
+    # weight 1, v_th = 1e4: within Loihi's 17-bit vth (64-LSB state units), stored as it is
     net, rec = quantize(small(np.array([[1.0]]), v_th=1e4), load_profile("loihi"))
     assert rec.populations["y"]["exact"] and rec.projections["w"]["max_abs_error"] == 0
     assert net.projections[0].weights[0, 0] == 1.0 and net.populations[1].params.v_th == 1e4

@@ -19,13 +19,13 @@ def test_loihi_figures_from_notes():
     assert (p.cores_per_chip, p.neurons_per_core, p.input_axons_per_core,
             p.output_axons_per_core) == (128, 1024, 4096, 4096)
     assert p.synapse_memory_bits_per_core == 16_384 * 64
-    assert (p.weight_bits, p.threshold_bits, p.delay_bits, p.max_delay_steps) == (8, 24, 6, 63)
-    # Lava's bit-accurate Loihi: 24-bit state, threshold = 17-bit mantissa << 6, bias =
-    # 13-bit mantissa << 0..7, weights = 8-bit mantissa << (6 + weight_exp), weight_exp <= 7
-    assert (p.threshold_mantissa_bits, p.threshold_shift, p.threshold_max) == (
-        17, 6, (2**17 - 1) << 6)
-    assert (p.bias_mantissa_bits, p.bias_exponent_max, p.weight_exponent_max) == (13, 7, 13)
-    assert p.state_bits == 24 and p.graded_spike_bits is None and p.per_neuron_scales
+    assert (p.weight_bits, p.threshold_bits, p.delay_bits, p.max_delay_steps) == (8, 18, 6, 63)
+    # Lava's and nengo-loihi's bit-accurate Loihi, in state units of 64 LSBs (act_shift = 6):
+    # 24-bit state = 18 bits of units, threshold = 17-bit vth units (v > vth), bias = 13-bit
+    # mantissa << 0..7 LSBs = << -6..1 units, mixed weights = +-127 << (weight_exp + 1) units
+    assert (p.threshold_mantissa_bits, p.threshold_shift, p.threshold_max) == (17, 0, 2**17 - 1)
+    assert (p.bias_mantissa_bits, p.bias_exponent_max, p.weight_exponent_max) == (13, 1, 8)
+    assert p.state_bits == 18 and p.graded_spike_bits is None and p.per_neuron_scales
     p2 = load_profile("loihi2")
     assert (p2.weight_bits, p2.state_bits, p2.graded_spike_bits) == (8, 24, 24)
     assert not p.shared_weights_per_core

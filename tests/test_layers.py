@@ -10,7 +10,8 @@ Bottom to top:
    ``backends``;
 4. ``backends`` — the simulator, artifacts, exporters, emission;
 5. the applications — ``compiler.cli``, ``compiler.demo``, ``compiler.bench``,
-   ``compiler.sweep``, ``backends.emit.command``, ``radarsnn``: anything below.
+   ``compiler.sweep``, ``backends.emit.command``, ``backends.crosscheck.command``,
+   ``radarsnn``: anything below.
 
 A module may import its own layer and those below; function-level imports count too
 (a lazy import is still a dependency).  :data:`EXCEPTIONS` lists each remaining upward
@@ -28,7 +29,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("ir", "radar", "compiler", "backends", "radarsnn")
 APPLICATIONS = ("compiler.cli", "compiler.demo", "compiler.bench", "compiler.sweep",
-                "backends.emit.command", "radarsnn")
+                "backends.emit.command", "backends.crosscheck.command", "radarsnn")
 
 #: (importer, imported) -> why the upward import stays (none today; the test below keeps
 #: the mechanism honest: an entry that is no longer needed fails).

@@ -8,7 +8,8 @@ function, collected explicitly in :data:`COMMAND_MODULES`:
   :mod:`compiler.cli.import_nir` — ``import-nir``;
 * :mod:`compiler.cli.demo` — ``demo``, ``bench``;
 * :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
-  (Dask is imported only when a sweep runs).
+  (Dask is imported only when a sweep runs);
+* :mod:`backends.crosscheck.command` — ``crosscheck``.
 
 Exit status (:data:`EXIT_OK`, :data:`EXIT_ERROR`, :data:`EXIT_USAGE`): 0 on success;
 1 on a runtime error — an error of the project's hierarchy, an unreadable file, or a
@@ -56,7 +57,7 @@ LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
 COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
                    "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
-                   "compiler.cli.import_nir")
+                   "compiler.cli.import_nir", "backends.crosscheck.command")
 
 
 def _version() -> str:

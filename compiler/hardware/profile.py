@@ -162,8 +162,8 @@ class HardwareProfile(BaseModel):
 
         Examples
         --------
-        >>> load_profile("loihi").threshold_max  # (2**17 - 1) << 6
-        8388544
+        >>> load_profile("loihi").threshold_max  # 17-bit vth in 64-LSB state units
+        131071
         """
         limits = []
         if self.threshold_bits is not None:
