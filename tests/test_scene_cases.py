@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from compiler.chains import range_cfar_chain
 from compiler.demo.hard_cases import measure_case
@@ -157,3 +159,38 @@ def test_measure_case_refuses_calibration_seeds_and_unknown_cases():
         measure_case("leaky_mimo", seeds=(0, 100))
     with pytest.raises(RadarConfigError, match="unknown hard case 'nope'"):
         measure_case("nope")
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), name=st.sampled_from(sorted(SCENE_CASES)))
+def test_every_draw_keeps_its_targets_apart_and_on_the_axes(seed, name):
+    case = SCENE_CASES[name]
+    cfg, scene = case.config(), case.scene(seed)
+    dr, m = cfg.range_resolution_m, cfg.n_chirps
+    for t in scene.targets:  # on the range axis for the whole frame (simulate_frame's check)
+        end = t.range_m + t.velocity_mps * cfg.frame_time_s
+        assert 0 < min(t.range_m, end) and max(t.range_m, end) <= cfg.max_range_m
+    if name in ("leaky_mimo", "saturated_mimo", "high_noise"):
+        pos = [(t.range_m / dr, t.velocity_mps / cfg.velocity_resolution_mps + m // 2)
+               for t in scene.targets]
+        assert all(abs(d - m // 2) >= 4 for _, d in pos)
+        for i, (r, d) in enumerate(pos):
+            for r2, d2 in pos[i + 1:]:
+                assert abs(r - r2) >= 12 - 1e-9 or min(abs(d - d2), m - abs(d - d2)) >= 7 - 1e-9
+
+
+def test_measure_case_counts_what_the_chains_detect():
+    """The harness's totals on one 1-D frame agree with scoring the two chains by hand."""
+    score = measure_case("chirp_sequence_1d", "loihi2", seeds=(3,))
+    case = SCENE_CASES["chirp_sequence_1d"]
+    frame = case.frame(3)
+    out = evaluate(range_cfar_chain(case.config()), {"adc": frame.adc})
+    conv = score_range_peaks(np.asarray(out["det"]), np.asarray(out["rp"]),
+                             [chirp_range_bins(frame.config, frame.truth[0])])
+    assert (score.frames, score.truth) == (1, 201)
+    assert score.conv_found == sum(conv.hits) and score.conv_false == conv.n_false
+    assert score.conv_cells == int(np.asarray(out["det"]).sum())
+    assert score.both_cells <= min(score.conv_cells, score.spk_cells)
+    d = score.as_dict()
+    assert d["sensitivity"] == score.both_cells / score.conv_cells
+    assert d["spk_false_per_frame"] == score.spk_false
