@@ -11,8 +11,9 @@ never hold the targets of the frames measured (another set). :data:`SCENE_CASES`
   thermal noise from a 14 dB noise figure;
 * ``saturated_mimo`` — the same without the 4 strong targets and the coupling 5.1 dB
   louder: the 12-bit ADC clips (≈ 0.2 % of the rail samples);
-* ``high_noise`` — ``mimo77``, 12 targets 10–15 dB above the noise on the range-Doppler
-  map, a receiver 12 dB noisier, weaker leakage;
+* ``high_noise`` — ``mimo77``, 12 targets 16–21 dB above the noise in their range-Doppler
+  cell (0–5 dB above the default OS-CFAR's threshold on the 12-receiver sum), a receiver
+  12 dB noisier, weaker leakage;
 * ``range_migration`` — ``mimo77``, 8 targets at 25–60 m/s that cross 2–5 range bins over
   the frame (Doppler aliased);
 * ``chirp_sequence_1d`` — ``chirpseq``, one target crossing 4–8 range bins over 201 chirps,
@@ -273,7 +274,7 @@ SCENE_CASES: dict[str, SceneCase] = {case.name: case for case in (
               "(32 of them 40-70 dB), static clutter, 12-bit ADC", _leaky),
     SceneCase("saturated_mimo", "mimo77", "leaky_mimo with the coupling at -2.9 dBFS: the "
               "ADC clips", _saturated),
-    SceneCase("high_noise", "mimo77", "12 targets 10-15 dB above the noise of a 26 dB "
+    SceneCase("high_noise", "mimo77", "12 targets 16-21 dB above the noise of a 26 dB "
               "noise-figure receiver", _high_noise),
     SceneCase("range_migration", "mimo77", "8 targets at 25-60 m/s crossing 2-5 range bins "
               "in the frame", _migrating),
