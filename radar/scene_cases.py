@@ -33,7 +33,7 @@ False
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,6 +50,7 @@ __all__ = [
     "receiver_noise_dbfs",
 ]
 
+_DRAW_KEY = 34  # a fixed second key: the draws' stream is apart from the simulator's
 _BOLTZMANN_DBM_PER_HZ = -174.0  # kT at 290 K, dBm/Hz
 _HANN_ENBW = 1.5  # equivalent noise bandwidth of a Hann window, bins
 
@@ -139,12 +140,22 @@ class SceneCase:
         if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
             raise RadarConfigError(f"SceneCase '{self.name}': seed must be a non-negative "
                                    f"int, got {seed!r}")
-        scene = self.draw(self.config(), np.random.default_rng([int(seed), 34]))
+        scene = self.draw(self.config(), np.random.default_rng([int(seed), _DRAW_KEY]))
         return scene.model_copy(update={"name": f"{self.name}-{seed}"})
 
     def frame(self, seed: int) -> Frame:
         """The simulated frame of ``seed`` (:func:`radar.scene.simulate_frame`)."""
         return simulate_frame(self.config(), self.scene(seed), seed=seed)
+
+    def cube(self, seeds: Sequence[int]) -> np.ndarray:
+        """The ADC cubes of ``seeds`` stacked on a new first axis (calibration inputs).
+
+        Examples
+        --------
+        >>> SCENE_CASES["chirp_sequence_1d"].cube([100, 101]).shape
+        (2, 1, 201, 512)
+        """
+        return np.stack([self.frame(s).adc for s in seeds])
 
 
 def _spread(rng: np.random.Generator, n: int, n_range: int, n_doppler: int, *,

@@ -211,8 +211,8 @@ def measure_case(name: str, target: str = "loihi2", *, seeds: Sequence[int] = (0
     (adc,) = (n for n in graph.topological_order() if graph.op(n).op == "adc_input")
     score = CaseScore(case=name, target=target, motifs=dict(motifs or {}), seeds=list(seeds))
     t0 = time.perf_counter()
-    cal = np.stack([scene.frame(s).adc for s in calibration_seeds])
-    program, note = compile_for(graph, target, {adc: cal}, motifs=motifs, options=options)
+    program, note = compile_for(graph, target, {adc: scene.cube(calibration_seeds)},
+                                motifs=motifs, options=options)
     score.compile_s = time.perf_counter() - t0
     if note:
         score.notes.append(note)
