@@ -275,6 +275,8 @@ def main(argv: list[str] | None = None) -> int:
             print(hard_lines[-1], flush=True)
     seconds = time.perf_counter() - start
     print("\n" + "\n".join(hard_lines))
+    print("targets found: ground truth within ± 1 bin; chirp_sequence_1d counts (target, chirp) "
+          "pairs")
     if args.json:
         Path(args.json).write_text(json.dumps([s.as_dict() for s in scores], indent=1),
                                    encoding="utf-8")

@@ -10,7 +10,7 @@ never hold the targets of the frames measured (another set). :data:`SCENE_CASES`
   noise) and a radome return at 1.5 bins, 48 static clutter points at zero Doppler,
   thermal noise from a 14 dB noise figure;
 * ``saturated_mimo`` — the same without the 4 strong targets and the coupling 5.1 dB
-  louder: the 12-bit ADC clips (≈ 0.2 % of the rail samples);
+  louder: the 12-bit ADC clips (0.03–0.17 % of the rail samples on seeds 0–2);
 * ``high_noise`` — ``mimo77``, 12 targets 16–21 dB above the noise in their range-Doppler
   cell (0–5 dB above the default OS-CFAR's threshold on the 12-receiver sum), a receiver
   12 dB noisier, weaker leakage;
