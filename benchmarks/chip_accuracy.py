@@ -52,6 +52,7 @@ from ir import Graph, evaluate
 from radar.config import preset
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Target, simulate_frame
+from radar.scene_cases import SCENE_CASES
 
 TARGETS = ("loihi2", "loihi", "spinnaker2", "unbounded")
 CALIBRATION_SEEDS = (100, 101)
@@ -248,7 +249,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=None, help="write the hard cases' totals here")
     parser.add_argument("--out", default=None,
                         help="markdown file (default docs/chip_accuracy.md without --case)")
+    parser.add_argument("--list", action="store_true", help="list the hard cases and exit")
     args = parser.parse_args(argv)
+    if args.list:
+        for name, case in HARD_CASES.items():
+            print(f"{name:18} {SCENE_CASES[case.scene].sensor:8} {case.summary}; "
+                  f"{SCENE_CASES[case.scene].summary}")
+        return 0
     motifs = _motifs(args.motifs)
     chosen = [c for item in args.case for c in item.split(",") if c]
     unknown = [c for c in chosen if c not in HARD_CASES]

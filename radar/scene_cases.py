@@ -283,8 +283,8 @@ def _chirp_sequence(config: RadarConfig, rng: np.random.Generator) -> Scene:
 SCENE_CASES: dict[str, SceneCase] = {case.name: case for case in (
     SceneCase("leaky_mimo", "mimo77", "36 targets 15-70 dB below near-range leakage "
               "(32 of them 40-70 dB), static clutter, 12-bit ADC", _leaky),
-    SceneCase("saturated_mimo", "mimo77", "leaky_mimo with the coupling at -2.9 dBFS: the "
-              "ADC clips", _saturated),
+    SceneCase("saturated_mimo", "mimo77", "leaky_mimo without its 4 strong targets and the "
+              "coupling at -2.9 dBFS: the ADC clips", _saturated),
     SceneCase("high_noise", "mimo77", "12 targets 16-21 dB above the noise of a 26 dB "
               "noise-figure receiver", _high_noise),
     SceneCase("range_migration", "mimo77", "8 targets at 25-60 m/s crossing 2-5 range bins "

@@ -194,3 +194,15 @@ def test_measure_case_counts_what_the_chains_detect():
     d = score.as_dict()
     assert d["sensitivity"] == score.both_cells / score.conv_cells
     assert d["spk_false_per_frame"] == score.spk_false
+
+
+def test_the_benchmark_reads_motifs_and_lists_the_cases(capsys):
+    from benchmarks.chip_accuracy import _motifs, main
+
+    assert _motifs("dft=resonator, det=host") == {"dft": "resonator", "det": "host"}
+    assert _motifs("") == {}
+    with pytest.raises(SystemExit, match="'dft' is not node=motif"):
+        _motifs("dft")
+    assert main(["--list"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
+    assert listed == list(SCENE_CASES)[:1] + ["leaky_mimo_ca"] + list(SCENE_CASES)[1:]
