@@ -1,6 +1,7 @@
 """Chip-faithful accuracy: the compiled range-Doppler-CFAR chain vs the conventional one.
 
 ``python benchmarks/chip_accuracy.py [--quick] [--targets loihi2,...] [--out FILE.md]``
+``python benchmarks/chip_accuracy.py --case leaky_mimo --target loihi2 [--motifs dft=resonator]``
 
 For each hardware profile (loihi2, loihi, spinnaker2, unbounded) the chain is compiled
 **calibrated on frames of other seeds** (seeds 100 and 101, never measured) and run on:
@@ -16,13 +17,22 @@ For each hardware profile (loihi2, loihi, spinnaker2, unbounded) the chain is co
 * the two real OpenRadar TI captures (``shared/data/openradar``), each calibrated on the
   other: cell sensitivity / precision of a range–Doppler OS-CFAR chain.
 
-It prints the table and writes it, with the command and the machine, to ``--out``.
+and the hard cases of :data:`compiler.demo.hard_cases.HARD_CASES` (``--case`` picks some and
+skips the rows above): scenes of :mod:`radar.scene_cases` drawn afresh per seed, calibrated
+on seeds 100–101, measured on seeds 0–2 (``--seeds``): leakage 40–70 dB above the targets
+on a 3 Tx × 4 Rx 12-bit sensor, a clipping ADC, targets near the noise threshold, range
+migration, CA-CFAR on linear power, a 1-D chirp sequence (range + CFAR per chirp).
+``--motifs node=motif,...`` compiles every chain with those motifs; ``--json FILE`` writes
+the hard cases' totals.
+
+It prints the tables and writes them, with the command and the machine, to ``--out``.
 Everything runs the closed-form engine (identical to the step engine on these networks).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import sys
@@ -34,6 +44,7 @@ import numpy as np
 from backends.reference import run_program
 from compiler.chains import capture_chain, range_doppler_chain
 from compiler.compile import compile_graph
+from compiler.demo.hard_cases import HARD_CASES, CaseScore, compile_for, measure_case
 from compiler.demo.matching import score_peaks
 from compiler.hardware import load_profile
 from compiler.lowering.dft_common import sft_rmse
@@ -42,6 +53,7 @@ from ir.errors import BudgetError
 from radar.config import preset
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Target, simulate_frame
+from radar.scene_cases import SCENE_CASES
 
 TARGETS = ("loihi2", "loihi", "spinnaker2", "unbounded")
 CALIBRATION_SEEDS = (100, 101)
@@ -60,32 +72,23 @@ def _profile(target: str):
     return None if target == "unbounded" else load_profile(target)
 
 
-def _compile(name: str, scene, target: str):
+def _compile(name: str, scene, target: str, motifs: dict[str, str]):
     """Compile on ``target``; a chain that does not fit one chip is placed on a board of
     as many chips as it needs (accuracy does not depend on the placement; noted)."""
     config = preset(name)
     graph = range_doppler_chain(config)
     cal = np.stack([simulate_frame(config, scene, seed=s).adc for s in CALIBRATION_SEEDS])
-    profile = _profile(target)
-    for chips in (1, 4, 16, 64):
-        p = profile if profile is None or chips == 1 else profile.model_copy(
-            update={"chips": chips, "name": f"{profile.name}x{chips}"})
-        try:
-            program = compile_graph(graph, p, calibration_inputs={"adc": cal})
-        except BudgetError:
-            if profile is None or chips == 64:
-                raise
-            continue
-        if chips > 1:
-            BOARDS[f"{target}/{name}"] = f"{name} needs {chips} {target} chips (board)"
-        return config, graph, program
-    raise AssertionError("unreachable")
+    program, note = compile_for(graph, target, {"adc": cal}, motifs=motifs)
+    if note:
+        BOARDS[f"{target}/{name}"] = f"{name} {note}"
+    return config, graph, program
 
 
-def scene_rows(name: str, target: str, seeds, scene=None) -> dict:
+def scene_rows(name: str, target: str, seeds, scene=None, motifs: dict[str, str] | None = None
+               ) -> dict:
     """Totals over ``seeds`` of one preset's scene (or a given scene) on one target."""
     scene = scene or SCENE_PRESETS[name]()
-    config, graph, program = _compile(name, scene, target)
+    config, graph, program = _compile(name, scene, target, motifs or {})
     tot = dict(conv=0, spk=0, hits=0, truth=0, conv_found=0, spk_found=0, conv_false=0,
                spk_false=0, clipped=0, frames=0)
     for seed in seeds:
@@ -122,7 +125,8 @@ def dynamic_range_scene(below_db: float):
                                    "name": f"carrada-weak{below_db:g}"})
 
 
-def ti_rmse(target: str, t_steps: int = 256) -> float | None:
+def ti_rmse(target: str, t_steps: int = 256, motifs: dict[str, str] | None = None
+            ) -> float | None:
     """Leave-one-chirp-out RMSE of the range S-FT on the TI chirps (None: no data)."""
     try:
         chirps, _ = load_ti_chirps()
@@ -137,7 +141,7 @@ def ti_rmse(target: str, t_steps: int = 256) -> float | None:
     for i in range(chirps.shape[0]):
         others = np.delete(chirps, i, axis=0)
         program = compile_graph(graph, _profile(target), calibration_inputs={"x": others},
-                                time_steps=t_steps)
+                                time_steps=t_steps, motifs=motifs)
         y = run_program(program, {"x": chirps[i]}, mode="auto",
                         out_of_range="clip").outputs["o"]
         ref = np.fft.fft(chirps[i])[: n // 2]
@@ -145,7 +149,7 @@ def ti_rmse(target: str, t_steps: int = 256) -> float | None:
     return float(np.mean(errors))
 
 
-def openradar_rows(target: str) -> dict | None:
+def openradar_rows(target: str, motifs: dict[str, str] | None = None) -> dict | None:
     """The OpenRadar captures (same TI sensor), each calibrated on the other (first 128
     samples of ``doppler_example``): cell totals of the range–Doppler OS-CFAR chain of
     ``tests/test_real_captures.py``; None without the data."""
@@ -156,7 +160,8 @@ def openradar_rows(target: str) -> dict | None:
     graph = capture_chain()
     tot = dict(conv=0, spk=0, hits=0, clipped=0)
     for cal, test in ((frames[1], frames[0]), (frames[0], frames[1])):
-        program = compile_graph(graph, _profile(target), calibration_inputs={"frame": cal})
+        program = compile_graph(graph, _profile(target), calibration_inputs={"frame": cal},
+                                motifs=motifs)
         conv = evaluate(graph, {"frame": test})["det"]
         res = run_program(program, {"frame": test}, mode="auto", out_of_range="clip")
         spk = np.asarray(res.values["det"]).astype(bool)
@@ -171,47 +176,130 @@ def _ratio(a: int, b: int) -> str:
     return f"{a / b:.3f}" if b else "–"
 
 
+def _motifs(text: str) -> dict[str, str]:
+    """``"dft=resonator,det=host"`` -> ``{"dft": "resonator", "det": "host"}``."""
+    out = {}
+    for item in filter(None, (p.strip() for p in text.split(","))):
+        key, sep, value = item.partition("=")
+        if not sep or not key or not value:
+            raise SystemExit(f"--motifs: {item!r} is not node=motif (e.g. dft=resonator)")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str]) -> list[str]:
+    """The rows of the preset scenes, the dynamic-range scenes and the real captures."""
+    rows = []
+    cases = [(f"{n}, seeds {seeds.start}-{seeds.stop - 1}", n, None) for n in
+             ("carrada", "seed003")]
+    cases += [(f"carrada + target {db} dB below the strongest", "carrada",
+               dynamic_range_scene(db)) for db in (30, 45, 60)]
+    for label, name, scene in cases:
+        t = scene_rows(name, target, seeds if scene is None else range(2), scene, motifs)
+        rows.append(f"| {target} | {label} | {_ratio(t['hits'], t['conv'])} | "
+                    f"{_ratio(t['hits'], t['spk'])} | {t['conv_found']}/{t['truth']} / "
+                    f"{t['spk_found']}/{t['truth']} | {t['conv_false']} / {t['spk_false']} | "
+                    f"{t['clipped']} |")
+        print(rows[-1], flush=True)
+    if quick:
+        return rows
+    real = openradar_rows(target, motifs)
+    if real is not None:
+        rows.append(f"| {target} | OpenRadar TI captures, each calibrated on the other | "
+                    f"{_ratio(real['hits'], real['conv'])} | "
+                    f"{_ratio(real['hits'], real['spk'])} | | | {real['clipped']} |")
+        print(rows[-1], flush=True)
+    try:
+        rmse = ti_rmse(target, motifs=motifs)
+        cell = f"RMSE {'–' if rmse is None else f'{rmse:.4f}'}"
+    except BudgetError as err:  # the chip cannot hold it: say so, do not stop
+        cell = "does not fit: " + " ".join(str(err).split())[:160]
+    rows.append(f"| {target} | TI chirps, range S-FT T=256, leave-one-out | {cell} | | | | |")
+    print(rows[-1], flush=True)
+    return rows
+
+
+HARD_HEADER = [
+    "| target | case | motifs | cell sensitivity | cell precision | targets found (conv / "
+    "spiking) | false objects per frame (conv / spiking) | clipped inputs | ADC clipped rails "
+    "| compile + run s |",
+    "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+
+
+def hard_row(score: CaseScore) -> str:
+    """One table row of a hard case (``profile`` cases count (target, chirp) pairs)."""
+    d = score.as_dict()
+    ratio = lambda v: "–" if v is None else f"{v:.3f}"  # noqa: E731
+    motifs = ", ".join(f"{k}={v}" for k, v in score.motifs.items()) or "defaults"
+    note = f" ({'; '.join(score.notes)})" if score.notes else ""
+    return (f"| {score.target} | {score.case}{note} | {motifs} | {ratio(score.sensitivity)} | "
+            f"{ratio(score.precision)} | {score.conv_found}/{score.truth} / "
+            f"{score.spk_found}/{score.truth} | {d['conv_false_per_frame']:.1f} / "
+            f"{d['spk_false_per_frame']:.1f} | {score.clipped_inputs} | {score.adc_clipped} | "
+            f"{score.compile_s + score.run_s:.0f} |")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="seeds 0-1 only, no TI")
-    parser.add_argument("--targets", default=",".join(TARGETS))
-    parser.add_argument("--out", default="docs/chip_accuracy.md")
+    parser.add_argument("--quick", action="store_true",
+                        help="seeds 0-1 of the presets and seed 0 of the hard cases, no TI")
+    parser.add_argument("--targets", "--target", default=",".join(TARGETS))
+    parser.add_argument("--case", action="append", default=[],
+                        help="hard case(s) to run, comma-separated (repeatable): "
+                             f"{', '.join(HARD_CASES)}; skips the preset and capture rows")
+    parser.add_argument("--seeds", default=None,
+                        help="measured seeds of the hard cases, e.g. 0,1,2 (default 0-2)")
+    parser.add_argument("--motifs", default="", help="node=motif,... for every chain")
+    parser.add_argument("--json", default=None, help="write the hard cases' totals here")
+    parser.add_argument("--out", default=None,
+                        help="markdown file (default docs/chip_accuracy.md without --case)")
+    parser.add_argument("--list", action="store_true", help="list the hard cases and exit")
     args = parser.parse_args(argv)
+    if args.list:
+        for name, case in HARD_CASES.items():
+            print(f"{name:18} {SCENE_CASES[case.scene].sensor:8} {case.summary}; "
+                  f"{SCENE_CASES[case.scene].summary}")
+        return 0
+    motifs = _motifs(args.motifs)
+    chosen = [c for item in args.case for c in item.split(",") if c]
+    unknown = [c for c in chosen if c not in HARD_CASES]
+    if unknown:
+        parser.error(f"unknown case(s) {unknown}; cases: {', '.join(HARD_CASES)}")
+    hard_seeds = ([int(x) for x in args.seeds.split(",")] if args.seeds else
+                  [0] if args.quick else [0, 1, 2])
+    out_path = args.out if args.out is not None else (None if chosen else
+                                                      "docs/chip_accuracy.md")
     seeds = range(2) if args.quick else range(5)
     lines = ["| target | case | cell sensitivity | cell precision | truth found "
              "(conv / spiking) | false objects (conv / spiking) | clipped inputs |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
+    hard_lines, scores = list(HARD_HEADER), []
     start = time.perf_counter()
     for target in args.targets.split(","):
-        cases = [(f"{n}, seeds {seeds.start}-{seeds.stop - 1}", n, None) for n in
-                 ("carrada", "seed003")]
-        cases += [(f"carrada + target {db} dB below the strongest", "carrada",
-                   dynamic_range_scene(db)) for db in (30, 45, 60)]
-        for label, name, scene in cases:
-            t = scene_rows(name, target, seeds if scene is None else range(2), scene)
-            row = (f"| {target} | {label} | {_ratio(t['hits'], t['conv'])} | "
-                   f"{_ratio(t['hits'], t['spk'])} | {t['conv_found']}/{t['truth']} / "
-                   f"{t['spk_found']}/{t['truth']} | {t['conv_false']} / {t['spk_false']} | "
-                   f"{t['clipped']} |")
-            lines.append(row)
-            print(row, flush=True)
-        if not args.quick:
-            real = openradar_rows(target)
-            if real is not None:
-                row = (f"| {target} | OpenRadar TI captures, each calibrated on the other | "
-                       f"{_ratio(real['hits'], real['conv'])} | "
-                       f"{_ratio(real['hits'], real['spk'])} | | | {real['clipped']} |")
-                lines.append(row)
-                print(row, flush=True)
-            try:
-                rmse = ti_rmse(target)
-                cell = f"RMSE {'–' if rmse is None else f'{rmse:.4f}'}"
-            except BudgetError as err:  # the chip cannot hold it: say so, do not stop
-                cell = "does not fit: " + " ".join(str(err).split())[:160]
-            row = f"| {target} | TI chirps, range S-FT T=256, leave-one-out | {cell} | | | | |"
-            lines.append(row)
-            print(row, flush=True)
+        if not chosen:
+            lines += preset_rows(target, seeds, args.quick, motifs)
+        for name in chosen or list(HARD_CASES):
+            score = measure_case(name, target, seeds=hard_seeds,
+                                 calibration_seeds=CALIBRATION_SEEDS, motifs=motifs)
+            scores.append(score)
+            hard_lines.append(hard_row(score))
+            print(hard_lines[-1], flush=True)
     seconds = time.perf_counter() - start
+    print("\n" + "\n".join(hard_lines))
+    print("targets found: ground truth within ± 1 bin; chirp_sequence_1d counts (target, chirp) "
+          "pairs")
+    if args.json:
+        Path(args.json).write_text(json.dumps([s.as_dict() for s in scores], indent=1),
+                                   encoding="utf-8")
+    if out_path:
+        _write_markdown(Path(out_path), argv, seconds, lines if not chosen else [],
+                        hard_lines, hard_seeds)
+    print(f"\n{seconds:.0f} s" + (f"; written to {out_path}" if out_path else ""))
+    return 0
+
+
+def _write_markdown(out: Path, argv, seconds: float, lines: list[str], hard_lines: list[str],
+                    hard_seeds: list[int]) -> None:
     command = "python benchmarks/chip_accuracy.py " + " ".join(argv or sys.argv[1:])
     machine = (f"{platform.machine()}, {os.cpu_count()} cores, Python "
                f"{platform.python_version()}, numpy {np.__version__}")
@@ -222,17 +310,18 @@ def main(argv: list[str] | None = None) -> int:
         "the dynamic-range scenes use seeds 0-1. Sensitivity and precision are cell-level",
         "against the conventional chain's detections; targets and false objects are",
         "detection peaks (± 1 bin) against the ground truth (`compiler.demo.matching`).", "",
-        *lines, "",
+        *(lines + [""] if lines else []),
+        "## Hard cases", "",
+        f"Scenes of `radar.scene_cases` drawn per seed; calibrated on seeds 100-101, measured on "
+        f"seeds {', '.join(map(str, hard_seeds))} (`compiler.demo.hard_cases`). Targets found "
+        "by each chain on its own; for `chirp_sequence_1d` (target, chirp) pairs.", "",
+        *hard_lines, "",
         *(["Placement: " + "; ".join(sorted(BOARDS.values())) + " — a board profile of "
             "that many chips (`chips` raised; accuracy does not depend on placement).", ""]
           if BOARDS else [])])
-    if args.out:
-        out = Path(args.out)
-        old = out.read_text(encoding="utf-8") if out.is_file() else ""
-        notes = old[old.index("## Notes"):] if "## Notes" in old else ""  # hand-written
-        out.write_text(text + ("\n" + notes if notes else ""), encoding="utf-8")
-    print(f"\n{seconds:.0f} s; written to {args.out}")
-    return 0
+    old = out.read_text(encoding="utf-8") if out.is_file() else ""
+    notes = old[old.index("## Notes"):] if "## Notes" in old else ""  # hand-written
+    out.write_text(text + ("\n" + notes if notes else ""), encoding="utf-8")
 
 
 if __name__ == "__main__":

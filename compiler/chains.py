@@ -22,7 +22,8 @@ from typing import Any
 from ir import Graph
 from radar.config import RadarConfig
 
-__all__ = ["DEFAULT_CFAR", "capture_chain", "range_chain", "range_doppler_chain"]
+__all__ = ["CA_CFAR", "DEFAULT_CFAR", "RANGE_CFAR", "capture_chain", "range_cfar_chain",
+           "range_chain", "range_doppler_chain"]
 
 #: The demo's detector: 2-D OS-CFAR on the power map, guard 3/2 and training 8/4 cells per side
 #: along range/Doppler (N = 23·13 − 7·5 = 264 training cells), the k = 198 ≈ ¾N-th largest as the
@@ -31,6 +32,19 @@ __all__ = ["DEFAULT_CFAR", "capture_chain", "range_chain", "range_doppler_chain"
 DEFAULT_CFAR: dict[str, Any] = {
     "kind": "os", "axes": ["range", "doppler"], "guard": [3, 2], "train": [8, 4], "k": 198,
     "pfa": 1e-6, "edge": ["clip", "wrap"],
+}
+
+#: :data:`DEFAULT_CFAR`'s window with cell averaging on linear power (Pfa 1e-6, α from N = 264).
+CA_CFAR: dict[str, Any] = {
+    "kind": "ca", "axes": ["range", "doppler"], "guard": [3, 2], "train": [8, 4],
+    "pfa": 1e-6, "edge": ["clip", "wrap"],
+}
+
+#: The per-chirp detector of :func:`range_cfar_chain`: 1-D OS-CFAR along range on power,
+#: guard 2 and training 12 cells per side (N = 24), k = 18 (¾N), Pfa 1e-4, edges clipped.
+RANGE_CFAR: dict[str, Any] = {
+    "kind": "os", "axes": ["range"], "guard": 2, "train": 12, "k": 18, "pfa": 1e-4,
+    "edge": "clip",
 }
 
 
@@ -120,6 +134,53 @@ def range_chain(config: RadarConfig, *, window: str = "hann", rx: int | None = N
         {"id": "out", "op": "output", "input": "rng"},
     ]
     graph = Graph.from_dict({"name": name or f"{config.name}-range", "nodes": nodes})
+    graph.verify()
+    return graph
+
+
+def range_cfar_chain(config: RadarConfig, *, window: str = "hann",
+                     cfar: dict[str, Any] | None = None, name: str | None = None) -> Graph:
+    """The 1-D chain ADC cube → window → range DFT → power → Σrx → CFAR along range, per chirp.
+
+    No Doppler DFT: the chirp axis is a batch (each chirp's range profile is detected on
+    its own), as for chirp sequences whose targets cross range bins between chirps.
+
+    Parameters
+    ----------
+    config : RadarConfig
+        The sensor (cube shape, real/IQ sampling).
+    window : str
+        Range window kind.
+    cfar : dict, optional
+        Parameters of the ``cfar`` node (default :data:`RANGE_CFAR`, along ``range``).
+    name : str, optional
+        Chain name (default ``<config name>-range-cfar``).
+
+    Returns
+    -------
+    Graph
+        Node ids ``adc, win, rng, mag, rp, det, out``; ``det`` is ``[chirp, range]``.
+
+    Examples
+    --------
+    >>> from radar.config import preset
+    >>> g = range_cfar_chain(preset("chirpseq"))
+    >>> dict(g.infer_types()["det"].axes)
+    {'chirp': 201, 'range': 256}
+    """
+    shape = {"rx": config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
+    nodes = [
+        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
+         "full_scale": float(config.full_scale_code)},
+        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
+        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
+         "keep": "all" if config.iq else "positive"},
+        {"id": "mag", "op": "magnitude", "input": "rng", "kind": "square"},
+        {"id": "rp", "op": "sum", "input": "mag", "axis": "rx"},
+        {"id": "det", "op": "cfar", "input": "rp", **(cfar or RANGE_CFAR)},
+        {"id": "out", "op": "output", "input": "det"},
+    ]
+    graph = Graph.from_dict({"name": name or f"{config.name}-range-cfar", "nodes": nodes})
     graph.verify()
     return graph
 

@@ -2,7 +2,8 @@
 loaders for real captures, readers of files on disk (TI raw ``.bin``, ``.mat``, ``.npz``),
 and the conventional DSP/CFAR reference.
 
-Submodules: :mod:`radar.config`, :mod:`radar.scene`, :mod:`radar.loaders`,
+Submodules: :mod:`radar.config` (presets; the record in :mod:`radar.sensor`),
+:mod:`radar.scene`, :mod:`radar.scene_cases` (hard scenes drawn per seed), :mod:`radar.loaders`,
 :mod:`radar.ti_capture`, :mod:`radar.readers`,
 :mod:`radar.windows`, :mod:`radar.dsp`, :mod:`radar.spectra`, :mod:`radar.cfar_window`,
 :mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
@@ -18,12 +19,14 @@ from radar.dsp import dft, dft_matrix, magnitude, to_db
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.readers import read_mat_array, read_npz_array
 from radar.scene import SCENE_PRESETS, Frame, Scene, Target, simulate_frame
+from radar.scene_cases import SCENE_CASES
 from radar.spectra import range_doppler_map
 from radar.ti_capture import TiBinLayout, read_ti_bin
 from radar.windows import apply_window
 
 __all__ = [
     "PRESETS",
+    "SCENE_CASES",
     "SCENE_PRESETS",
     "Frame",
     "RadarConfig",

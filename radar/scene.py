@@ -48,6 +48,7 @@ __all__ = [
     "Target",
     "TargetTruth",
     "carrada_scene",
+    "chirp_range_bins",
     "seed003_scene",
     "simulate_frame",
     "target_amplitude_dbfs",
@@ -55,7 +56,11 @@ __all__ = [
 
 
 def _returns(config: RadarConfig, scene: Scene, rng: np.random.Generator) -> tuple:
-    """All point returns as arrays ``(range0_m, velocity_mps, sin_az, amplitude_codes)``."""
+    """All point returns as arrays ``(range0_m, velocity_mps, sin_az, amplitude_codes)``.
+
+    Draws from ``rng`` the clutter, then the leakage's chirp phase noise (see
+    :func:`_jitter`), in that order.
+    """
     fs = float(config.full_scale_code)
     t = scene.targets
     r0 = [x.range_m for x in t] + [x.range_m for x in scene.leakage]
@@ -76,7 +81,24 @@ def _returns(config: RadarConfig, scene: Scene, rng: np.random.Generator) -> tup
             rng.standard_normal(k) + 1j * rng.standard_normal(k)) / np.sqrt(2)
         extra = (c_r, np.zeros(k), np.sin(np.deg2rad(c_az)), c_amp)
         arrays = [np.concatenate([a, e]) for a, e in zip(arrays, extra, strict=True)]
-    return tuple(arrays)
+    return (*arrays, _jitter(config, scene, rng))
+
+
+def _jitter(config: RadarConfig, scene: Scene, rng: np.random.Generator) -> dict:
+    """Return index -> per-chirp phase factor ``exp(j phi)``, shape [n_virtual, M, 1].
+
+    One Gaussian phase of rms ``phase_noise_deg`` per transmitted chirp (chirp ``m`` of
+    Tx slot ``s`` is the ``m n_tx + s``-th), shared by the receivers of that chirp. Only
+    leakage with ``phase_noise_deg > 0`` draws, so other scenes use no random numbers here.
+    """
+    out = {}
+    slot = np.repeat(np.arange(config.n_tx), config.n_rx)
+    for i, lk in enumerate(scene.leakage):
+        if lk.phase_noise_deg > 0:
+            phi = np.deg2rad(lk.phase_noise_deg) * rng.standard_normal(
+                (config.n_chirps, config.n_tx))
+            out[len(scene.targets) + i] = np.exp(1j * phi[:, slot].T)[:, :, None]
+    return out
 
 
 def _check_ranges(config: RadarConfig, scene: Scene) -> None:
@@ -102,7 +124,7 @@ def _check_ranges(config: RadarConfig, scene: Scene) -> None:
 
 def _beat_cube(config: RadarConfig, returns: tuple) -> np.ndarray:
     """Noise-free complex beat signal summed over returns, shape [n_virtual, M, N]."""
-    r0, vel, sin_az, amp = returns
+    r0, vel, sin_az, amp, jitter = returns
     c = SPEED_OF_LIGHT_MPS
     t_fast = config.adc_start_s + np.arange(config.n_samples) / config.fs_hz
     slot = np.repeat(np.arange(config.n_tx), config.n_rx)
@@ -114,7 +136,8 @@ def _beat_cube(config: RadarConfig, returns: tuple) -> np.ndarray:
     cube = np.zeros(t_abs.shape, dtype=np.complex128)
     for k in range(r0.size):  # a handful of returns; each is vectorized over the cube
         cycles = (r0[k] + vel[k] * t_abs) * cycles_per_m + pos * sin_az[k]
-        cube += amp[k] * np.exp(2j * np.pi * (cycles - np.floor(cycles)))
+        a = amp[k] * jitter[k] if k in jitter else amp[k]
+        cube += a * np.exp(2j * np.pi * (cycles - np.floor(cycles)))
     return cube
 
 
@@ -149,6 +172,48 @@ def _truth(config: RadarConfig, scene: Scene, n_angle_bins: int) -> tuple[Target
             aliased=not (-config.max_velocity_mps <= v < config.max_velocity_mps),
             angle_bin=angle))
     return tuple(out)
+
+
+def chirp_range_bins(config: RadarConfig, truth: TargetTruth) -> np.ndarray:
+    """The exact range bin of a target on each chirp of Tx slot 0 (range migration).
+
+    ``f_b(m) N / fs`` with the beat frequency at mid-window of chirp ``m``,
+    ``f_b(m) = (2S/c)(R0 + v (m n_tx T_c + 2 t_fast_mid)) + 2 f_c v / c``: the frame-level
+    ``TargetTruth.range_bin_exact`` is this at mid-frame.
+
+    Parameters
+    ----------
+    config : RadarConfig
+        The sensor the frame was simulated with.
+    truth : TargetTruth
+        One target's truth (its ``range_m`` and ``velocity_mps`` are used).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (n_chirps,); wrapped into ``[0, N)`` for IQ, folded (``abs``) for
+        real sampling, like ``range_bin_exact``.
+
+    Examples
+    --------
+    A target closing at 30 m/s on the ``carrada`` sensor moves 0.136 m (0.68 bins) in a frame:
+
+    >>> from radar.config import preset
+    >>> cfg = preset("carrada")
+    >>> frame = simulate_frame(cfg, Scene(targets=(Target(range_m=20.0, velocity_mps=-30.0),),
+    ...                                   noise_dbfs=None), seed=0)
+    >>> bins = chirp_range_bins(cfg, frame.truth[0])
+    >>> round(float(bins[0] - bins[-1]), 2)
+    0.68
+    """
+    c, n = SPEED_OF_LIGHT_MPS, config.n_samples
+    t_fast_mid = config.adc_start_s + (n - 1) / (2 * config.fs_hz)
+    t_chirp = np.arange(config.n_chirps) * config.n_tx * config.chirp_period_s
+    v = truth.velocity_mps
+    beat_hz = (2 * config.slope_hz_per_s / c) * (
+        truth.range_m + v * (t_chirp + 2 * t_fast_mid)) + 2 * config.carrier_hz * v / c
+    exact = beat_hz * n / config.fs_hz
+    return exact % n if config.iq else np.abs(exact)
 
 
 def _adc(x: np.ndarray, full_scale: int) -> tuple[np.ndarray, int]:

@@ -42,11 +42,15 @@ class Leakage(RadarModel):
 
     The radar equation does not hold this close, so the amplitude is given directly, as a
     peak per-rail amplitude in dBFS; it is identical on every virtual channel.
+    ``phase_noise_deg`` is the rms of an independent Gaussian phase per transmitted chirp
+    (the oscillator's phase noise the coupling path does not cancel), so the return is
+    static over the chirps up to that jitter; 0 (the default) makes it exactly static.
     """
 
     range_m: float = Field(default=0.0, ge=0)
     amplitude_dbfs: float
     phase_deg: float = 0.0
+    phase_noise_deg: float = Field(default=0.0, ge=0, le=180)
     name: str = "leakage"
 
 

@@ -85,7 +85,7 @@ def test_axes():
 
 
 def test_presets_table_and_unknown_name():
-    assert sorted(PRESETS) == ["carrada", "openradar", "seed003"]
+    assert sorted(PRESETS) == ["carrada", "chirpseq", "mimo77", "openradar", "seed003"]
     for name in PRESETS:
         assert preset(name).name == name
     with pytest.raises(RadarConfigError, match="unknown radar preset 'ti'.*carrada.*seed003"):
