@@ -98,6 +98,8 @@ class CfarOptions(BaseModel):
         = Field(None, description="a pair (lo, hi) of quantiles, 0 <= lo <= hi <= 1, or a "
                                   "mapping of node id or CFAR kind to one")
     cfar_ties: Literal["balanced", "exact"] = Field("balanced", description="balanced or exact")
+    cfar_steps: _Steps | None = Field(
+        None, description="an integer >= 1 (the CFAR's own steps; default time_steps)")
 
 
 class ResonatorOptions(BaseModel):
