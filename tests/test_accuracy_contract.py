@@ -88,7 +88,11 @@ class _Fake:
     def __init__(self, motifs, steps):
         self.motifs, self.steps = motifs, steps
         self.records = type("R", (), {"report": type("Rep", (), {
-            "data": {"latency": {"total_steps": steps, "fits": steps <= 100}}})()})()
+            "data": {"latency": {"total_steps": steps, "fits": steps <= 100,
+                                 "frame_period_s": 1e-3, "total_s": steps * 1e-5,
+                                 "networks": [{"network": "n", "runs": 2,
+                                               "time_steps": steps // 2,
+                                               "latency_steps": steps}]}}})()})()
         self.graph = type("G", (), {"op": staticmethod(
             lambda n: type("O", (), {"op": n})())})()
 
@@ -122,5 +126,13 @@ def test_the_deadline_never_moves_a_stage_to_the_host():
     def build(motifs, options):
         return _Fake(motifs, 1000)  # never fits
 
-    with pytest.raises(BudgetError, match="frame deadline"):
-        search(["dft", "cfar"], build, lambda p: _contract([]))
+    tried = []
+
+    def build_and_log(motifs, options):
+        tried.append(dict(motifs))
+        return build(motifs, options)
+
+    with pytest.raises(BudgetError, match=r"frame deadline.*0\.01 s per frame.*'n' alone runs 2"):
+        search(["dft", "cfar"], build_and_log, lambda p: _contract([]))
+    # only a change of motif can cut steps: time -> resonator, no option rungs, no host
+    assert tried == [{"dft": "time", "cfar": "time"}, {"dft": "resonator", "cfar": "time"}]

@@ -199,8 +199,9 @@ def _can_climb(op: str, rung: int, deadline: bool, host: bool) -> bool:
     ladder = LADDERS[op]
     if rung + 1 >= len(ladder):
         return False
-    if ladder[rung + 1].motif != "host":
-        return not host
+    nxt = ladder[rung + 1]
+    if nxt.motif != "host":  # the deadline asks for fewer steps: another motif, not options
+        return not host and (not deadline or nxt.motif != ladder[rung].motif)
     return host and op in HOST_FALLBACK and not deadline
 
 
@@ -230,18 +231,28 @@ def _give_up(selection: Selection, programs: list, accuracy: str):
         what = (f"stage {node!r} ({stage.node}, motif {stage.motif}) breaks the accuracy "
                 f"contract: {'; '.join(why)}")
     else:
-        lat = attempt.steps
-        raise BudgetError(
-            f"no spiking configuration fits the frame deadline: the best keeps the accuracy "
-            f"contract with {lat} steps per frame ({attempt.config}), more than the frame "
-            f"period allows on this target (see the report's latency); ways out: a board "
-            f"profile with more cores (spatial repetitions), a lower frame rate "
-            f"(frame_rate_hz), or keep a stage on the host (motifs={{'dft': 'host'}})")
+        raise BudgetError(_deadline_message(programs[best], attempt))
     tried = ", ".join(str(a.config) for a in selection.attempts)
     raise AccuracyError(
         f"{what} (best of {len(selection.attempts)} configurations tried: {attempt.config}; "
         f"tried {tried}). Ways out: keep that stage on the host (motifs={{{node!r}: 'host'}}), "
         f"more steps (time_steps=...), or accept the loss (accuracy='warn')", node=node)
+
+
+def _deadline_message(program, attempt: Attempt) -> str:
+    """Which network breaks the frame deadline, by how much, and the ways out."""
+    lat = program.records.report.data["latency"]
+    worst = max(lat["networks"], key=lambda r: r["latency_steps"])
+    period, total = lat["frame_period_s"], lat.get("total_s")
+    over = f"{total:.3g} s per frame against a frame period of {period:.3g} s" \
+        if total is not None else f"{lat['total_steps']} steps per frame"
+    return (f"no spiking configuration that keeps the accuracy contract fits the frame "
+            f"deadline: the best ({attempt.config}) needs {over}; network "
+            f"{worst['network']!r} alone runs {worst['runs']} time-multiplexed repetition(s) "
+            f"x {worst['time_steps']} steps = {worst['latency_steps']} steps. Ways out: a "
+            f"board profile with more cores (repetitions side by side), a lower frame rate "
+            f"(options={{'frame_rate_hz': ...}}), or keep a stage on the host "
+            f"(motifs={{'dft': 'host'}})")
 
 
 def ops_to_search(graph, pinned: Mapping[str, str]) -> list[str]:
