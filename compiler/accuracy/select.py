@@ -249,7 +249,8 @@ def _deadline_message(program, attempt: Attempt) -> str:
     return (f"no spiking configuration that keeps the accuracy contract fits the frame "
             f"deadline: the best ({attempt.config}) needs {over}; network "
             f"{worst['network']!r} alone runs {worst['runs']} time-multiplexed repetition(s) "
-            f"x {worst['time_steps']} steps = {worst['latency_steps']} steps. Ways out: a "
+            f"x {worst['time_steps']} steps = {worst['latency_steps']} steps"
+            + (f" of {worst['step_s']:.3g} s" if worst.get("step_s") else "") + ". Ways out: a "
             f"board profile with more cores (repetitions side by side), a lower frame rate "
             f"(options={{'frame_rate_hz': ...}}), or keep a stage on the host "
             f"(motifs={{'dft': 'host'}})")
