@@ -123,7 +123,7 @@ def test_the_search_climbs_the_failing_op_and_tries_the_host_last():
     _, sel = search(["dft", "cfar"], build, measure)
     configs = [a.config for a in sel.attempts]
     assert configs[0] == {"dft": "time", "cfar": "time"}
-    assert configs[1]["dft"] == "resonator"            # the first failing stage climbs first
+    assert configs[1]["dft"] == LADDERS["dft"][1].label  # the first failing stage climbs first
     assert configs[-1]["cfar"] == "host" and sel.host_ops == ["cfar"]
     assert all(c["cfar"] != "host" for c in configs[:-1])  # spiking rungs all tried before
 

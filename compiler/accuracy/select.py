@@ -55,7 +55,7 @@ class Candidate:
 
 #: Op name -> its rungs, cheapest first; the last is always the host.
 LADDERS: dict[str, tuple[Candidate, ...]] = {
-    "dft": (Candidate("time"), Candidate("resonator"),
+    "dft": (Candidate("time"), Candidate("time", (("charging", "log"),)), Candidate("resonator"),
             Candidate("resonator", (("encoder_headroom", 32.0), ("stream_bits", 14)))),
     "cfar": (Candidate("time"), Candidate("time", (("cfar_steps", 300),)), Candidate("host")),
 }
@@ -80,7 +80,7 @@ class Ladder:
             cand = LADDERS[op][rung]
             motifs[op] = cand.motif
             for k, v in cand.options:
-                options[k] = max(options.get(k, v), v)
+                options[k] = v if isinstance(v, str) else max(options.get(k, v), v)
         return motifs, options
 
 
@@ -185,24 +185,29 @@ def search(ops: Sequence[str], build: Callable[[dict[str, str], dict[str, Any]],
             culprits = list(ops)
         # spiking rungs first (the failing op, then its upstream ops), the host last
         order = [(op, host) for host in (False, True) for op in culprits if op in ops]
-        nxt = next((ops.index(op) for op, host in order
-                    if _can_climb(op, rungs[ops.index(op)], deadline, host)), None)
-        if nxt is None:
+        step = next(((ops.index(op), r) for op, host in order
+                     if (r := _next_rung(op, rungs[ops.index(op)], deadline, host)) is not None),
+                    None)
+        if step is None:
             break
-        rungs[nxt] += 1
+        rungs[step[0]] = step[1]
     return _give_up(selection, programs, accuracy)
 
 
-def _can_climb(op: str, rung: int, deadline: bool, host: bool) -> bool:
-    """Whether ``op`` has a next rung to try: a spiking one, or (``host``) the host rung of
-    an op in :data:`HOST_FALLBACK` for accuracy (never for the deadline)."""
+def _next_rung(op: str, rung: int, deadline: bool, host: bool) -> int | None:
+    """The next rung of ``op`` to try, or None: a spiking one (for the deadline, the next
+    that changes the motif: only another motif has fewer steps), or (``host``) the host
+    rung of an op in :data:`HOST_FALLBACK`, for accuracy only."""
     ladder = LADDERS[op]
-    if rung + 1 >= len(ladder):
-        return False
-    nxt = ladder[rung + 1]
-    if nxt.motif != "host":  # the deadline asks for fewer steps: another motif, not options
-        return not host and (not deadline or nxt.motif != ladder[rung].motif)
-    return host and op in HOST_FALLBACK and not deadline
+    for nxt in range(rung + 1, len(ladder)):
+        cand = ladder[nxt]
+        if cand.motif == "host":
+            return nxt if host and op in HOST_FALLBACK and not deadline else None
+        if host:
+            continue
+        if not deadline or cand.motif != ladder[rung].motif:
+            return nxt
+    return None
 
 
 def _latency(program) -> tuple[int | None, bool | None]:
@@ -251,9 +256,9 @@ def _deadline_message(program, attempt: Attempt) -> str:
             f"{worst['network']!r} alone runs {worst['runs']} time-multiplexed repetition(s) "
             f"x {worst['time_steps']} steps = {worst['latency_steps']} steps"
             + (f" of {worst['step_s']:.3g} s" if worst.get("step_s") else "") + ". Ways out: a "
-            f"board profile with more cores (repetitions side by side), a lower frame rate "
-            f"(options={{'frame_rate_hz': ...}}), or keep a stage on the host "
-            f"(motifs={{'dft': 'host'}})")
+            "board profile with more cores (repetitions side by side), a lower frame rate "
+            "(options={'frame_rate_hz': ...}), or keep a stage on the host "
+            "(motifs={'dft': 'host'})")
 
 
 def ops_to_search(graph, pinned: Mapping[str, str]) -> list[str]:

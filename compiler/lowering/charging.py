@@ -65,10 +65,6 @@ COMPANDING_RATIOS = (0.7, 0.5, 0.35, 0.25)
 #: steps each level is 5.6 % above the next (±2.8 %, −31 dB of error at every level).
 LOG_DYNAMIC_RANGE = float(2 ** 20)
 
-#: ``charging='auto'`` takes the ``log`` schedule where the constant one's error over the
-#: calibration values' noise cells is above this (dB re their RMS; see noise_error_db).
-LOG_SWITCH_DB = -20.0
-
 #: Default guard of a host-decoded layer: values up to this factor above the calibrated
 #: full scale (24 dB) are coded coarsely instead of clipped (:func:`with_guard`).
 GUARD_RATIO = 16.0
@@ -294,12 +290,12 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
     samples : ndarray, optional
         Non-negative membrane values from the calibration set (None: constant).
     mode : {"auto", "constant", "companding", "log"}
-        ``auto`` takes the ``log`` schedule (:func:`log_schedule`) where the constant
-        one decodes the noise cells of the samples with an error above
-        :data:`LOG_SWITCH_DB` (a floor more than ≈ 48 dB under the top at 256 steps),
-        else keeps the constant bias unless a companding schedule lowers the MSE by
+        ``auto`` keeps the constant bias unless a companding schedule lowers the MSE by
         more than ``min_gain`` (relative); ``companding`` takes the best companding
-        candidate; ``log`` the logarithmic one.
+        candidate; ``log`` the logarithmic one (:func:`log_schedule`), which keeps a
+        noise floor more than ≈ 48 dB under the top (at 256 steps) that the others
+        decode to 0 — ``motifs="auto"`` tries it when the accuracy contract asks
+        (:mod:`compiler.accuracy.select`).
     min_gain : float
         Relative improvement required in ``auto``.
     whole : bool or int
@@ -326,14 +322,8 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
         raise CompileError(f"charging={mode!r} is not a schedule; use 'auto', 'constant', "
                            "'companding' or 'log'")
     candidates = {"constant": constant_schedule(n_steps, v_full, whole)}
-    if mode == "log" or (mode == "auto" and samples is not None and n_steps >= 4):
-        candidates["log"] = log_schedule(n_steps, v_full, whole=whole)
-        if mode == "log":
-            return candidates["log"], {}
-        floor = {n: noise_error_db(candidates[n], samples) for n in ("constant", "log")}
-        if floor["constant"] > LOG_SWITCH_DB and floor["log"] < floor["constant"]:
-            return candidates["log"], {f"noise_db-{n}": e for n, e in floor.items()}
-        del candidates["log"]
+    if mode == "log":
+        return log_schedule(n_steps, v_full, whole=whole), {}
     if mode != "constant" and samples is not None and n_steps >= 4:
         for r in COMPANDING_RATIOS:
             candidates[f"companding-{r}"] = companding_schedule(n_steps, v_full, r, whole=whole)
