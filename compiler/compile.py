@@ -339,6 +339,9 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
     chosen = selection.attempts[selection.chosen]
     program.records.accuracy = chosen.contract
     program.records.extra["motif_selection"] = selection.to_dict()
+    if program.records.report is not None:  # shown per stage in the report
+        program.records.report.data["accuracy"] = chosen.contract.to_dict()
+        program.records.report.data["motif_selection"] = selection.to_dict()
     return program
 
 

@@ -142,3 +142,24 @@ def test_the_deadline_never_moves_a_stage_to_the_host():
         search(["dft", "cfar"], build_and_log, lambda p: _contract([]))
     # only a change of motif can cut steps: time -> resonator, no option rungs, no host
     assert tried == [{"dft": "time", "cfar": "time"}, {"dft": "resonator", "cfar": "time"}]
+
+
+def test_the_cli_measures_with_calibration_frames_and_refuses_a_loss(tmp_path, capsys):
+    from compiler.cli import main
+
+    chain, frames = tmp_path / "rd.yaml", tmp_path / "x.npy"
+    chain.write_text(RD.to_yaml())
+    np.save(frames, _frames(3, 0))
+    ok = ["compile", str(chain), "-c", str(frames), "-o", str(tmp_path / "a"), "--quiet"]
+    assert main([*ok[:-1]]) == 0
+    out = capsys.readouterr().out
+    assert "accuracy on 1 held-out frame(s)" in out and "FAILS" not in out
+    assert "## Accuracy on 1 held-out frame(s): holds" in (tmp_path / "a/report.md").read_text()
+    lossy = [*ok[:4], "-t", "spinnaker2", "-m", "dft=resonator", "--option",
+             "resonator_readout=time", "-o", str(tmp_path / "b"), "--quiet"]
+    assert main(lossy) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "stage 'f'" in err[0] and "lost" in err[0]
+    assert not (tmp_path / "b").exists()
+    assert main([*lossy, "--accuracy", "warn"]) == 0
+    assert "warning: stage 'f__moving'" in capsys.readouterr().err
