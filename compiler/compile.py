@@ -30,6 +30,10 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
+from compiler.accuracy.check import check_program
+from compiler.accuracy.contract import Tolerances, split_folds
+from compiler.accuracy.select import ops_to_search, search
+from compiler.accuracy.simulator import Simulator
 from compiler.compile_guards import check_compile, limits_from_options
 from compiler.hardware import load_profile
 from compiler.lowering import LoweringRegistry, default_registry
@@ -48,6 +52,7 @@ from compiler.passes.static_split import StaticSplit, StaticSplitOptions
 from compiler.program import CompiledProgram
 from ir import Graph
 from ir.errors import CompileError, IRError
+from ir.frames import n_frames
 from ir.interpreter import EvalRegistry, eval_registry
 from ir.model import short_repr
 
@@ -196,7 +201,11 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
                   registry: LoweringRegistry | None = None,
                   evaluators: EvalRegistry | None = None,
                   progress: Progress | None = None,
-                  options: Mapping[str, Any] | None = None) -> CompiledProgram:
+                  options: Mapping[str, Any] | None = None,
+                  simulator: Simulator | None = None,
+                  check_inputs: Mapping[str, np.ndarray] | None = None,
+                  accuracy: str = "error",
+                  tolerances: Tolerances | None = None) -> CompiledProgram:
     """Compile a radar chain into spiking and host segments.
 
     Parameters
@@ -230,6 +239,24 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         ``progress(pass_name, message)`` on long work.
     options : mapping, optional
         Motif-specific options, see :data:`EXTRA_OPTIONS`.
+    simulator : Simulator, optional
+        Measure the accuracy contract (:mod:`compiler.accuracy`) with this simulator
+        and choose the motifs the user did not pin (``motifs="auto"``,
+        :mod:`compiler.accuracy.select`): the cheapest spiking configuration whose every
+        stage keeps the contract on held-back frames and whose steps fit the frame
+        period. :func:`radarsnn.compile_graph <radarsnn>` and ``radarsnn compile`` pass
+        the reference simulator; without one nothing is measured
+        (``program.records.accuracy`` is None).
+    check_inputs : mapping, optional
+        Frames to check on (default: the last third of the calibration frames, held
+        back from the calibration; with one calibration frame the check runs on it and
+        says it is not held out).
+    accuracy : {"error", "warn", "off"}
+        With a simulator, when no configuration keeps the contract: raise
+        :class:`~ir.errors.AccuracyError` naming the stage (``error``), or keep the
+        best configuration and say so in the records (``warn``); ``off`` measures nothing.
+    tolerances : Tolerances, optional
+        The contract (:class:`compiler.accuracy.contract.Tolerances`).
 
     Returns
     -------
@@ -250,6 +277,83 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
     """
     if isinstance(graph, (str, Path)):
         graph = Graph.from_yaml(Path(graph))
+    if accuracy not in ("error", "warn", "off"):
+        raise CompileError(f"accuracy={short_repr(accuracy)} must be error, warn or off")
+    once = dict(target=target, calibration=calibration, registry=registry,
+                evaluators=evaluators, progress=progress)
+    if simulator is None or accuracy == "off":
+        return _compile_once(graph, motifs=motifs, calibration_inputs=calibration_inputs,
+                             time_steps=time_steps, weight_bits=weight_bits, options=options,
+                             **once)
+    if not isinstance(simulator, Simulator):
+        raise CompileError(f"simulator={short_repr(simulator)} has no run(program, inputs) "
+                           "method (compiler.accuracy.simulator.Simulator)")
+    if not isinstance(graph, Graph):
+        raise CompileError(f"compile_graph takes a Graph or a chain file path; got "
+                           f"{type(graph).__name__}")
+    return _compile_checked(graph, motifs=dict(motifs or {}),
+                            calibration_inputs=dict(calibration_inputs or {}),
+                            check_inputs=check_inputs, time_steps=time_steps,
+                            weight_bits=weight_bits, options=dict(options or {}),
+                            simulator=simulator, accuracy=accuracy, tolerances=tolerances,
+                            once=once)
+
+
+def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, check_inputs,
+                     time_steps, weight_bits, options: dict, simulator: Simulator,
+                     accuracy: str, tolerances: Tolerances | None,
+                     once: dict) -> CompiledProgram:
+    """The measured compile: folds, the ladder search, the contract kept in the records."""
+    frames = n_frames(graph.infer_types(), calibration_inputs, f"chain {graph.name!r}") \
+        if calibration_inputs else None
+    if check_inputs is not None:
+        fit, check, held_out, note = calibration_inputs, dict(check_inputs), True, ""
+    else:
+        fit, check = split_folds(calibration_inputs, frames)
+        held_out, note = check is not None, ""
+        if check is None:
+            check = calibration_inputs
+            note = ("one calibration frame: checked on it (pass more frames or "
+                    "check_inputs to hold some back)")
+    if not check:
+        program = _compile_once(graph, motifs=motifs, time_steps=time_steps,
+                                weight_bits=weight_bits, options=options, **once)
+        if not any(seg.kind == "spiking" for seg in program.segments):
+            return program  # nothing spiking: nothing to measure
+        raise CompileError("the accuracy check needs frames: pass calibration_inputs or "
+                           "check_inputs (or accuracy='off' to compile unmeasured)")
+
+    def build(auto_motifs: dict[str, str], auto_options: dict[str, Any]) -> CompiledProgram:
+        steps = time_steps if time_steps is not None else auto_options.pop("time_steps", None)
+        auto_options.pop("time_steps", None)
+        return _compile_once(graph, motifs={**auto_motifs, **motifs}, calibration_inputs=fit,
+                             time_steps=steps, weight_bits=weight_bits,
+                             options={**auto_options, **options}, **once)
+
+    def measure(program: CompiledProgram):
+        return check_program(program, check, simulator, tolerances=tolerances,
+                             held_out=held_out, note=note)
+
+    program, selection = search(ops_to_search(graph, motifs), build, measure,
+                                accuracy=accuracy)
+    chosen = selection.attempts[selection.chosen]
+    program.records.accuracy = chosen.contract
+    program.records.extra["motif_selection"] = selection.to_dict()
+    if program.records.report is not None:  # shown per stage in the report
+        program.records.report.data["accuracy"] = chosen.contract.to_dict()
+        program.records.report.data["motif_selection"] = selection.to_dict()
+    return program
+
+
+def _compile_once(graph: Graph | str | Path, target: Any = "loihi2", *,
+                  motifs: Mapping[str, str] | None = None, calibration: str = "static",
+                  calibration_inputs: Mapping[str, np.ndarray] | None = None,
+                  time_steps: int | None = None, weight_bits: int | None = None,
+                  registry: LoweringRegistry | None = None,
+                  evaluators: EvalRegistry | None = None,
+                  progress: Progress | None = None,
+                  options: Mapping[str, Any] | None = None) -> CompiledProgram:
+    """One compile with the motifs given (compile_graph without a simulator)."""
     unknown = sorted(set(options or {}) - set(EXTRA_OPTIONS))
     if unknown:
         raise CompileError(f"unknown compile options {unknown}; known: {sorted(EXTRA_OPTIONS)}")

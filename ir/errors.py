@@ -10,7 +10,8 @@ still tell the kinds apart::
     ├── RadarConfigError   a radar configuration, scene or capture is inconsistent
     ├── NetworkError       a spiking network is malformed
     ├── CompileError       a graph cannot be compiled as asked
-    │   └── BudgetError    a compiled network does not fit the hardware budget
+    │   ├── BudgetError    a compiled network does not fit the hardware budget
+    │   └── AccuracyError  no spiking configuration keeps the conventional chain's detections
     ├── SimulationError    a simulation cannot run on the given inputs
     └── ArtifactError      an emitted artifact is missing, truncated, tampered or too new
 
@@ -37,6 +38,7 @@ __all__ = [
     "NetworkError",
     "CompileError",
     "BudgetError",
+    "AccuracyError",
     "SimulationError",
     "ArtifactError",
 ]
@@ -81,6 +83,10 @@ class CompileError(RadarSNNError):
 
 class BudgetError(CompileError):
     """A compiled network exceeds a hardware budget (neurons, axons, memory, steps)."""
+
+
+class AccuracyError(CompileError):
+    """No spiking configuration keeps what the conventional chain detects (names the stage)."""
 
 
 class SimulationError(RadarSNNError):

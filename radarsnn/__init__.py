@@ -25,12 +25,12 @@ from importlib.metadata import PackageNotFoundError, version
 from backends import load, load_program, save, save_program
 from backends.reference import run_program, simulate
 from backends.reference.accuracy import check_accuracy
-from compiler.compile import compile_graph
 from compiler.program import CompiledProgram
 from ir import Graph, evaluate
 from ir import errors as _errors
 from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
 from ir.ops import DFT, Input, Magnitude, Output, Window
+from radarsnn.compile import compile_graph
 
 try:
     __version__ = version("radarsnn")

@@ -134,3 +134,50 @@ def test_per_input_calibration_normalises_the_input_before_the_split() -> None:
     hits = int((conv["det"] & spk).sum())
     assert hits >= 0.97 * conv["det"].sum() and hits >= 0.97 * spk.sum()
     np.testing.assert_allclose(result.values["rd"].max(), conv["rd"].max(), rtol=0.01)
+
+
+# -------------------------------------------- chirp sequences without a Doppler DFT
+
+def _sequence_chain() -> Graph:
+    return Graph.from_dict({"name": "seq", "nodes": [
+        {"id": "x", "op": "input", "shape": {"chirp": 16, "sample": 64}, "complex": True},
+        {"id": "r", "op": "dft", "input": "x", "axis": "sample", "out_axis": "range",
+         "window": "hann"},
+        {"id": "m", "op": "magnitude", "input": "r", "kind": "square"},
+        {"id": "d", "op": "cfar", "input": "m", "kind": "os", "axes": ["range"], "guard": 2,
+         "train": 8, "k": 12, "pfa": 1e-4},
+        {"id": "o", "op": "output", "input": "d"}]})
+
+
+def _sequence_frame(seed: int) -> np.ndarray:
+    """Leakage 40 dB over a weak target whose range creeps over the chirps, unit noise."""
+    rng = np.random.default_rng(seed)
+    t, m = np.arange(64), np.arange(16)[:, None]
+    return (rng.normal(size=(16, 64)) + 1j * rng.normal(size=(16, 64))
+            + 3e3 * np.exp(2j * np.pi * 1.3 * t / 64)
+            + 30 * np.exp(2j * np.pi * (20 + 0.05 * m) * t / 64))
+
+
+def test_a_chirp_sequence_is_split_over_its_chirps_exactly():
+    g = _sequence_chain()
+    p = StaticSplit().apply(CompileContext(), CompiledProgram(graph=g))
+    (rec,) = p.records["static-split"]
+    assert rec["axis"] == "chirp" and rec["moving"] == ["r__moving"]
+    assert p.graph.inputs_of("r") == ("r__moving", "r__static")
+    x = _sequence_frame(0)
+    want, got = evaluate(g, {"x": x}), evaluate(p.graph, {"x": x})
+    np.testing.assert_allclose(got["r"], want["r"], rtol=0, atol=1e-9 * np.abs(want["r"]).max())
+    np.testing.assert_array_equal(got["d"], want["d"])
+
+
+def test_the_chirp_split_keeps_the_detections_the_leakage_hid():
+    g = _sequence_chain()
+    cal = {"x": np.stack([_sequence_frame(s) for s in (1, 2)])}
+    x = {"x": _sequence_frame(5)}
+    want = evaluate(g, x)["d"]
+    kept = {}
+    for mode in ("auto", "off"):
+        p = compile_graph(g, "loihi2", calibration_inputs=cal, options={"static_split": mode})
+        y = run_program(p, x, out_of_range="clip").outputs["o"].astype(bool)
+        kept[mode] = int((y & want).sum()) / int(want.sum())
+    assert kept["auto"] >= 0.97 > kept["off"], kept  # measured: 274 vs 176 of 275 cells

@@ -13,6 +13,7 @@ Modules: :mod:`~backends.reference.neuron` (the pure step function),
 (engines), :mod:`~backends.reference.result` (:class:`SimResult`).
 """
 
+from backends.reference.checker import ReferenceSimulator
 from backends.reference.closed import closed_form_problems
 from backends.reference.delivery import DELIVERY_BUILDERS, MatrixDelivery, StencilDelivery
 from backends.reference.neuron import NeuronState, StepParams, decay, neuron_step
@@ -23,6 +24,7 @@ from backends.reference.run_options import RunOptions
 from backends.reference.simulate import RASTER_LIMIT_BYTES, simulate
 
 __all__ = [
+    "ReferenceSimulator",
     "DELIVERY_BUILDERS",
     "RASTER_LIMIT_BYTES",
     "MatrixDelivery",

@@ -139,7 +139,7 @@ def compile_chain(chain: str | Path, target: str | None, *,
                   calibration: list[str] | None = None, bin_layout: str | None = None,
                   motifs: dict[str, str] | None = None, time_steps: int | None = None,
                   weight_bits: int | None = None, options: dict | None = None,
-                  quiet: bool = True):
+                  quiet: bool = True, accuracy: str = "off"):
     """Compile a chain file as every command that compiles one does (compile, report, emit, nir).
 
     Reads the chain, checks its estimated cost before the calibration arrays are read or
@@ -173,10 +173,15 @@ def compile_chain(chain: str | Path, target: str | None, *,
         note = SYNTHETIC_NOTE
     n_passes = len(default_pipeline(options, hardware=target is not None))
     progress = make_progress(quiet, total=n_passes, desc="compile")
+    measured = {}
+    if accuracy != "off":  # the contract on held-back frames, motifs="auto" (docs/accuracy.md)
+        from backends.reference import ReferenceSimulator
+        measured = {"simulator": ReferenceSimulator(), "accuracy": accuracy}
     try:
         program = compile_graph(graph, target=target, motifs=motifs or {},
                                 calibration_inputs=inputs, time_steps=time_steps,
-                                weight_bits=weight_bits, progress=progress, options=options)
+                                weight_bits=weight_bits, progress=progress, options=options,
+                                **measured)
     finally:
         getattr(progress, "close", lambda: None)()
     return program, note, inputs
@@ -193,12 +198,19 @@ def _compile(args: argparse.Namespace, target: str | None):
         motifs[key] = value
     if getattr(args, "repetitions", None):
         options["repetitions"] = args.repetitions
+    accuracy = args.accuracy or ("error" if args.calibration else "off")
     program, note, inputs = compile_chain(args.chain, target, calibration=args.calibration,
                                           bin_layout=getattr(args, "bin_layout", None),
                                           motifs=motifs, time_steps=args.time_steps,
                                           weight_bits=getattr(args, "weight_bits", None),
-                                          options=options, quiet=args.quiet or args.json)
-    _warn_accuracy(program, inputs, note)
+                                          options=options, quiet=args.quiet or args.json,
+                                          accuracy=accuracy)
+    if accuracy == "off":
+        _warn_accuracy(program, inputs, note)
+    elif not program.records.accuracy.holds:  # accuracy='warn' kept a failing configuration
+        for stage, why in program.records.accuracy.failing():
+            print(f"warning: stage {stage.node!r} ({stage.motif}) breaks the accuracy "
+                  f"contract: {'; '.join(why)} (accepted: --accuracy warn)", file=sys.stderr)
     return program, note
 
 
@@ -246,6 +258,9 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         if totals:
             print("  " + ", ".join(f"{k} {v:,}" for k, v in totals.items()
                                    if isinstance(v, int)))
+        contract = program.records.accuracy
+        if hasattr(contract, "lines"):  # measured: the accuracy contract per stage
+            print("\n".join(f"  {line}" for line in contract.lines()))
         print(f"  {note}; full report: {folder / 'report.md'}")
     return 0
 
@@ -312,6 +327,12 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--repetitions", choices=["auto", "spatial", "temporal"],
                    help="repeated stages: unrolled (spatial), one instance run R times per "
                         "frame (temporal), or spatial where it fits (auto, default)")
+    p.add_argument("--accuracy", choices=["error", "warn", "off"],
+                   help="measure every spiking stage on held-back calibration frames and "
+                        "choose the motifs that keep the conventional chain's detections "
+                        "(docs/accuracy.md): refuse a chain that loses them (error, the "
+                        "default with -c), keep the best and warn (warn), or skip it (off, "
+                        "the default on synthetic noise)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
 

@@ -140,7 +140,8 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
     t_in = ctx.types[value.node]
     win = op.window(node, t_in)
     alpha = op.alpha_for(win.n_train)
-    n_steps = ctx.settings_of(CfarOptions).time_steps
+    settings = ctx.settings_of(CfarOptions)
+    n_steps = settings.cfar_steps or settings.time_steps
     lo, hi, how, saturate = _range(ctx, node, value.node, op.kind)
     map_shape = tuple(t_in.axes[a] for a in win.axes)
     n_avail = training_counts(map_shape, guard=list(win.guard), train=list(win.train),

@@ -45,6 +45,9 @@ __all__ = [
     "ChargingSchedule",
     "constant_schedule",
     "companding_schedule",
+    "log_schedule",
+    "noise_error_db",
+    "LOG_DYNAMIC_RANGE",
     "choose_schedule",
     "dyadic_ceil",
     "bias_ceil",
@@ -57,6 +60,10 @@ __all__ = [
 
 #: Bias ratios between successive companding phases tried by :func:`choose_schedule`.
 COMPANDING_RATIOS = (0.7, 0.5, 0.35, 0.25)
+
+#: Ratio of the top to the bottom level of a ``log`` read-out (2^20, 120 dB): with 256
+#: steps each level is 5.6 % above the next (±2.8 %, −31 dB of error at every level).
+LOG_DYNAMIC_RANGE = float(2 ** 20)
 
 #: Default guard of a host-decoded layer: values up to this factor above the calibrated
 #: full scale (24 dB) are coded coarsely instead of clipped (:func:`with_guard`).
@@ -216,6 +223,59 @@ def companding_schedule(n_steps: int, v_full: float, ratio: float,
     return ChargingSchedule(n_steps, starts, tuple(bias_ceil(b0 * w, whole) for w in weights))
 
 
+def log_schedule(n_steps: int, v_full: float, dynamic_range: float = LOG_DYNAMIC_RANGE,
+                 whole: bool | int = False) -> ChargingSchedule:
+    r"""Thresholds that grow geometrically over the whole window: a logarithmic read-out.
+
+    A constant bias resolves ``v_full/n`` everywhere, so a value more than ``≈ 20\log_{10} n``
+    dB below the top (48 dB at ``n = 256``) decodes to 0 — the noise floor of a radar
+    spectrum whose returns span more. Here the threshold after step ``k`` is
+    ``v_{th} r^{k}`` from the bottom level ``v_full/D`` up to ``v_full``,
+    ``r = D^{1/(n−1)}``: every value in range decodes within ``±(r − 1)/2`` of itself
+    (relative), whatever its level — :func:`with_guard` over the whole window. The host
+    decodes the exact table of levels.
+
+    Examples
+    --------
+    >>> s = log_schedule(8, v_full=128.0, dynamic_range=128.0)  # r = 2: coarse, to read
+    >>> s.levels().tolist()
+    [144.0, 72.0, 36.0, 18.0, 9.0, 4.5, 2.25, 1.0]
+    >>> s.decode(np.array([100.0, 3.0, 0.4])).tolist()
+    [144.0, 4.5, 0.0]
+    >>> s = log_schedule(256, v_full=1e6)  # the default: 120 dB, within ±2.8 % everywhere
+    >>> v = np.array([9e5, 3e3, 10.0])
+    >>> bool(np.all(np.abs(s.decode(v) / v - 1) < 0.03))
+    True
+    """
+    _check(n_steps, v_full)
+    if n_steps < 2 or not dynamic_range > 1:
+        return constant_schedule(n_steps, v_full, whole)
+    body = constant_schedule(1, v_full / dynamic_range, whole)
+    return with_guard(body, n_steps - 1, dynamic_range, whole)
+
+
+def noise_error_db(schedule: ChargingSchedule, v: np.ndarray) -> float:
+    """Decoding error over the noise cells of ``v`` (``≤ 4·median``), dB re their RMS.
+
+    Examples
+    --------
+    >>> v = np.r_[np.random.default_rng(0).rayleigh(size=1000), 1e4]
+    >>> round(noise_error_db(constant_schedule(256, 1e4), v))  # the noise decodes to 0
+    0
+    >>> noise_error_db(log_schedule(256, 1e4), v) < -30
+    True
+    """
+    v = np.asarray(v, dtype=np.float64)
+    if not v.size:
+        return -240.0
+    quiet = v <= 4 * float(np.median(v))
+    ref = float(np.linalg.norm(v[quiet]))
+    err = float(np.linalg.norm(schedule.decode(v[quiet]) - v[quiet]))
+    if ref == 0:
+        return 0.0 if err > 0 else -240.0
+    return float(20 * np.log10(max(err / ref, 1e-12)))
+
+
 def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
                     mode: str = "auto", min_gain: float = 0.02, whole: bool | int = False
                     ) -> tuple[ChargingSchedule, dict[str, float]]:
@@ -229,10 +289,13 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
         Full-scale membrane value.
     samples : ndarray, optional
         Non-negative membrane values from the calibration set (None: constant).
-    mode : {"auto", "constant", "companding"}
-        ``auto`` keeps the constant bias unless a companding schedule lowers the
-        MSE by more than ``min_gain`` (relative); ``companding`` takes the best
-        companding candidate.
+    mode : {"auto", "constant", "companding", "log"}
+        ``auto`` keeps the constant bias unless a companding schedule lowers the MSE by
+        more than ``min_gain`` (relative); ``companding`` takes the best companding
+        candidate; ``log`` the logarithmic one (:func:`log_schedule`), which keeps a
+        noise floor more than ≈ 48 dB under the top (at 256 steps) that the others
+        decode to 0 — ``motifs="auto"`` tries it when the accuracy contract asks
+        (:mod:`compiler.accuracy.select`).
     min_gain : float
         Relative improvement required in ``auto``.
     whole : bool or int
@@ -255,10 +318,12 @@ def choose_schedule(n_steps: int, v_full: float, samples: np.ndarray | None, *,
     >>> choose_schedule(16, 100.0, v, mode="constant")[0].kind
     'constant'
     """
-    if mode not in ("auto", "constant", "companding"):
-        raise CompileError(f"charging={mode!r} is not a schedule; use 'auto', 'constant' or "
-                           "'companding'")
+    if mode not in ("auto", "constant", "companding", "log"):
+        raise CompileError(f"charging={mode!r} is not a schedule; use 'auto', 'constant', "
+                           "'companding' or 'log'")
     candidates = {"constant": constant_schedule(n_steps, v_full, whole)}
+    if mode == "log":
+        return log_schedule(n_steps, v_full, whole=whole), {}
     if mode != "constant" and samples is not None and n_steps >= 4:
         for r in COMPANDING_RATIOS:
             candidates[f"companding-{r}"] = companding_schedule(n_steps, v_full, r, whole=whole)

@@ -57,8 +57,8 @@ class TimeDftOptions(BaseModel):
 
     model_config = _CONFIG
     time_steps: _Steps = Field(256, description="an integer >= 1")
-    charging: Literal["auto", "constant", "companding"] = Field(
-        "auto", description="auto, constant or companding")
+    charging: Literal["auto", "constant", "companding", "log"] = Field(
+        "auto", description="auto, constant, companding or log")
     stage_gains: Literal["auto", "none", "weights", "neurons"] = Field(
         "auto", description="auto, none, weights or neurons")
     headroom: _Finite = Field(1.0, ge=1, description="a finite number >= 1")
@@ -98,6 +98,8 @@ class CfarOptions(BaseModel):
         = Field(None, description="a pair (lo, hi) of quantiles, 0 <= lo <= hi <= 1, or a "
                                   "mapping of node id or CFAR kind to one")
     cfar_ties: Literal["balanced", "exact"] = Field("balanced", description="balanced or exact")
+    cfar_steps: _Steps | None = Field(
+        None, description="an integer >= 1 (the CFAR's own steps; default time_steps)")
 
 
 class ResonatorOptions(BaseModel):
@@ -106,8 +108,8 @@ class ResonatorOptions(BaseModel):
     model_config = _CONFIG
     stream_bits: Annotated[int, Field(ge=1)] | None = Field(
         None, description="an integer >= 1 (bits of the stream code per input part)")
-    resonator_readout: Literal["auto", "time", "graded"] = Field(
-        "auto", description="auto, time or graded")
+    resonator_readout: Literal["auto", "time", "log", "graded"] = Field(
+        "auto", description="auto, time, log or graded")
     resonator_coef_bits: Annotated[int, Field(ge=2, le=30)] | None = Field(
         None, description="an integer in 2..30 (fraction bits of the rotation coefficients)")
     resonator_decay: _Finite = Field(1.0, gt=0, le=1, description="a number in (0, 1]")

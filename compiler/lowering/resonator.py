@@ -20,8 +20,13 @@ compartments ``±Re, ±Im`` charge with bias ``b`` for ``T`` steps (option
 S-FT motifs read the spikes as they read an S-FT layer's; each part is within ``b/2``
 of the exact value; a value read on the host charges each bin at its own calibrated
 scale.  ``'graded'`` sends the held state as one payload per compartment (one step, host
-read-out only).  ``'auto'`` (default) is ``graded`` on targets with graded spikes where
-the value goes to the host, else ``time``; ``docs/fourier.md`` compares both codes.
+read-out only).  ``'log'`` (host read-out only) charges every bin at one shared scale
+whose thresholds grow geometrically (:func:`~compiler.lowering.charging.log_schedule`:
+±2.8 % of every value from 24 dB over the calibrated peak down to 120 dB under it), so a
+new scene's target in a bin that held noise in the calibration frames is neither clipped
+nor is the noise floor decoded to 0.  ``'auto'`` (default) is ``graded`` on targets with
+graded spikes where the value goes to the host, ``log`` where it goes to the host
+without them, else ``time``; ``docs/fourier.md`` compares the codes.
 
 **Fixed point** (targets with ``weight_bits``): the rotation coefficients have
 :data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS` = 12 fraction bits — the
@@ -63,6 +68,7 @@ from math import prod
 import numpy as np
 
 from compiler.hardware.formats import bias_value
+from compiler.lowering.charging import GUARD_RATIO, ChargingSchedule, log_schedule
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.options import ResonatorOptions
@@ -221,10 +227,17 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
                            f"N={m} steps exceeds resonator_drift_max={limit} {why}", node=node)
     readout = _readout(ctx, node)
     graded = readout == "graded"
-    v_th = b * t_out + b / 2
-    phases = (Phase(start_step=0, spiking_on=False),
-              Phase(start_step=m, bias=0.0 if graded else b, input_on=False,
-                    spiking_on=not graded),
+    log = _log_readout(ctx, full / unit, t_out, integer) if readout == "log" else None
+    if log is not None:  # one shared logarithmic scale: no per-bin maxima to clip at
+        scales = None
+        v_th = log.v_th
+        charging = tuple(Phase(start_step=m + st, bias=bb, input_on=False)
+                         for st, bb in zip(log.starts, log.biases, strict=True))
+    else:
+        v_th = b * t_out + b / 2
+        charging = (Phase(start_step=m, bias=0.0 if graded else b, input_on=False,
+                          spiking_on=not graded),)
+    phases = (Phase(start_step=0, spiking_on=False), *charging,
               Phase(start_step=m + (1 if graded else t_out), input_on=False, spiking_on=False))
     per_bin = {} if graded or scales is None else {"scale_axis": axes.out_axis,
                                                    "scales": tuple(scales)}
@@ -240,7 +253,8 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
              group=(w_bits - 1) if w_bits else bits)
     builder.meta.setdefault("resonator", {})[node] = {
         **drift, "stream_bits": bits, "readout": readout, "readout_steps": 1 if graded else t_out,
-        "input_steps": m, "unit": unit, "bias": b, "v_th": v_th}
+        "input_steps": m, "unit": unit, "bias": b, "v_th": v_th,
+        **({"log_readout": log.describe()} if log is not None else {})}
     # host read-outs divide out each bin's known fixed-point gain |g_k| (magnitude drift)
     g_mag = (np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits, renorm=renorm))
              if f_bits else None)
@@ -250,6 +264,13 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
                       combine="re_im_signed", node=node, **comp)
         return ctx.spike_value(node, pop, dec, (m, m + 1), kind="graded", end=m + 1,
                                split="re_im_signed")
+    if log is not None:
+        comp = {"gain_axis": axes.out_axis, "gains": tuple(g_mag)} if f_bits else {}
+        dec = Decoder(port=node, population=pop.id, kind="spike_table", scale=unit,
+                      table=tuple(float(v) for v in log.levels()), t_ref=float(m),
+                      missing=0.0, combine="re_im_signed", node=node, **comp)
+        return ctx.spike_value(node, pop, dec, (m, m + t_out), kind="time-table",
+                               end=m + t_out, split="re_im_signed")
     gained = ({"gain_axis": axes.out_axis,
                "gains": tuple((g_mag if f_bits else 1.0) / scales)} if per_bin else {})
     dec = Decoder(port=node, population=pop.id, kind="spike_time", scale=unit * b,
@@ -266,18 +287,19 @@ def _host_read(ctx: LoweringContext, node: str) -> bool:
 
 def _readout(ctx: LoweringContext, node: str) -> str:
     """Option ``resonator_readout``: ``auto`` is ``graded`` where the target has graded spikes
-    and the value goes to the host, else ``time``."""
+    and the value goes to the host, ``log`` where it goes to the host without them, else
+    ``time`` (a spiking consumer reads the linear code)."""
     readout = ctx.settings_of(ResonatorOptions).resonator_readout
-    if readout not in ("auto", "time", "graded"):
+    if readout not in ("auto", "time", "log", "graded"):
         raise CompileError(f"node {node!r}: resonator_readout={readout!r} is not 'auto', "
-                           "'time' or 'graded'", node=node)
+                           "'time', 'log' or 'graded'", node=node)
     host = _host_read(ctx, node)
-    if readout == "graded" and not host:
-        raise CompileError(f"node {node!r}: resonator_readout='graded' sends the state to the "
-                           "host; a spiking consumer needs 'time'", node=node)
-    if readout == "auto":
-        return "graded" if host and getattr(ctx.target, "graded_spike_bits", None) else "time"
-    return readout
+    if readout in ("graded", "log") and not host:
+        raise CompileError(f"node {node!r}: resonator_readout={readout!r} is read by the "
+                           "host only; a spiking consumer needs 'time'", node=node)
+    if readout == "auto" and host:
+        return "graded" if getattr(ctx.target, "graded_spike_bits", None) else "log"
+    return "time" if readout == "auto" else readout
 
 
 def _coefficients(ctx: LoweringContext, node: str, theta: np.ndarray, rho: float,
@@ -321,6 +343,26 @@ def _readout_scales(ctx: LoweringContext, node: str, rec, axis: str, full_state:
         c = np.maximum(1.0, np.ceil(level * full_state / (2.0 * t_out)))
         return 2.0, c
     return full_state / t_out, level
+
+
+def _log_readout(ctx: LoweringContext, full_state: float, t_out: int,
+                 integer: bool) -> ChargingSchedule:
+    r"""The logarithmic time read-out of a host-read resonator (:func:`log_schedule`).
+
+    A constant bias resolves ``full/T``: a bin 48 dB under the calibrated peak (at
+    ``T = 256``) decodes to 0, and per-bin scales fitted to the calibration frames clip a
+    new scene's target in a bin that held noise there. Here every bin shares one scale
+    whose top is :data:`~compiler.lowering.charging.GUARD_RATIO` (24 dB) over the
+    calibrated full scale — as far as the state holds — and whose levels are geometric
+    down to :data:`~compiler.lowering.charging.LOG_DYNAMIC_RANGE` below it.
+    """
+    t = ctx.target
+    top = full_state * GUARD_RATIO
+    state_bits = getattr(t, "state_bits", None) if integer else None
+    if state_bits:
+        top = min(top, float(2 ** (state_bits - 1) - 1) / (1 + 2 ** (1 - t_out)))
+    whole = (getattr(t, "bias_mantissa_bits", None) or True) if integer else False
+    return log_schedule(t_out, top, whole=whole)
 
 
 def _whole_bias(ctx: LoweringContext, b: float) -> float:

@@ -64,6 +64,36 @@ def _table(rows: list[dict], cols: tuple[str, ...]) -> list[str]:
     return out
 
 
+def _accuracy_lines(acc: dict, selection: dict | None) -> list[str]:
+    """The accuracy contract per stage, and the configurations the motif search tried."""
+    held = "held-out" if acc["held_out"] else "calibration (not held-out)"
+    lines = ["", f"## Accuracy on {acc['n_frames']} {held} frame(s): "
+             f"{'holds' if acc['holds'] else 'FAILS'}", ""]
+    if acc.get("note"):
+        lines += [f"Note: {acc['note']}.", ""]
+    rows = []
+    for s in acc["stages"]:
+        f = s["figures"]
+        rows.append({"node": s["node"], "motif": s["motif"], "kind": s["kind"],
+                     "error_dB_re_noise": f.get("error_db"), "lost": f.get("lost"),
+                     "sensitivity": f.get("sensitivity"), "precision": f.get("precision"),
+                     "objects_kept": f"{f['kept']}/{f['objects']}" if "kept" in f else None,
+                     "extra_per_frame": f.get("extra_per_frame"), "clipped": s["clipped"],
+                     "failures": "; ".join(s["failures"]) or "—"})
+    lines += _table(rows, ("node", "motif", "kind", "error_dB_re_noise", "lost", "sensitivity",
+                           "precision", "objects_kept", "extra_per_frame", "clipped",
+                           "failures"))
+    if selection:
+        lines += ["", "Configurations tried (`motifs=\"auto\"`):", ""]
+        lines += _table([{"#": i, "config": ", ".join(f"{k}: {v}" for k, v in a["config"].items()),
+                          "steps": a["steps"], "fits": a["fits"], "holds": a["holds"],
+                          "chosen": i == selection.get("chosen"),
+                          "failures": "; ".join(a["failures"]) or (a["error"] or "—")}
+                         for i, a in enumerate(selection["attempts"])],
+                        ("#", "config", "steps", "fits", "holds", "chosen", "failures"))
+    return lines
+
+
 @dataclass
 class Report:
     """A resource report; ``data`` follows the schema in the module docstring."""
@@ -108,6 +138,8 @@ class Report:
                      if lat.get("max_step_s") else "") + "."]
         if lat.get("step_note"):
             lines += ["", f"Note: {lat['step_note']}."]
+        if d.get("accuracy"):
+            lines += _accuracy_lines(d["accuracy"], d.get("motif_selection"))
         if d.get("formats"):
             lines += ["", "## Number formats and dynamic-range mechanisms", ""]
             lines += _table(d["formats"], ("node", "item", "mechanism", "detail", "cost"))
