@@ -32,7 +32,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from backends.reference import run_program
+from backends.reference import ReferenceSimulator, run_program
 from compiler.chains import CA_CFAR, range_cfar_chain, range_doppler_chain
 from compiler.compile import compile_graph
 from compiler.demo.matching import score_peaks, score_range_peaks
@@ -161,10 +161,14 @@ def score_frame(kind: str, frame: Frame, graph: Graph, conv: Mapping, spk_graph:
 
 
 def compile_for(graph: Graph, target: str, calibration_inputs: Mapping[str, np.ndarray], *,
-                motifs: Mapping[str, str] | None = None, options: Mapping[str, Any] | None = None
-                ) -> tuple[Any, str | None]:
+                motifs: Mapping[str, str] | None = None, options: Mapping[str, Any] | None = None,
+                measured: bool = False) -> tuple[Any, str | None]:
     """Compile for ``target`` (``"unbounded"``: no profile); on a ``BudgetError`` retry on a
     board of 4, 16 then 64 chips (accuracy does not depend on the placement).
+
+    ``measured``: the compile measures the accuracy contract on the last calibration frames
+    (held back) and picks the motifs (``motifs="auto"``, :mod:`compiler.accuracy`), keeping
+    the best configuration where none holds (``accuracy="warn"``: the score says so).
 
     Returns
     -------
@@ -178,7 +182,9 @@ def compile_for(graph: Graph, target: str, calibration_inputs: Mapping[str, np.n
             update={"chips": chips, "name": f"{profile.name}x{chips}"})
         try:
             program = compile_graph(graph, p, calibration_inputs=calibration_inputs,
-                                    motifs=dict(motifs or {}), options=options)
+                                    motifs=dict(motifs or {}), options=options,
+                                    **({"simulator": ReferenceSimulator(), "accuracy": "warn"}
+                                       if measured else {}))
         except BudgetError:
             if profile is None or chips == 64:
                 raise
@@ -190,7 +196,8 @@ def compile_for(graph: Graph, target: str, calibration_inputs: Mapping[str, np.n
 def measure_case(name: str, target: str = "loihi2", *, seeds: Sequence[int] = (0, 1, 2),
                  calibration_seeds: Sequence[int] = (100, 101),
                  motifs: Mapping[str, str] | None = None,
-                 options: Mapping[str, Any] | None = None) -> CaseScore:
+                 options: Mapping[str, Any] | None = None,
+                 measured: bool = False) -> CaseScore:
     """Compile case ``name``'s chain for ``target`` calibrated on ``calibration_seeds``,
     run it on ``seeds`` and score it (the two seed sets must not overlap).
 
@@ -212,10 +219,17 @@ def measure_case(name: str, target: str = "loihi2", *, seeds: Sequence[int] = (0
     score = CaseScore(case=name, target=target, motifs=dict(motifs or {}), seeds=list(seeds))
     t0 = time.perf_counter()
     program, note = compile_for(graph, target, {adc: scene.cube(calibration_seeds)},
-                                motifs=motifs, options=options)
+                                motifs=motifs, options=options, measured=measured)
     score.compile_s = time.perf_counter() - t0
     if note:
         score.notes.append(note)
+    if measured:  # what the search chose, and whether its contract holds
+        sel = program.records.extra["motif_selection"]
+        chosen = sel["attempts"][sel["chosen"]]
+        score.notes.append(f"auto: {chosen['config']}"
+                           + ("" if chosen["holds"] else " (contract FAILS: "
+                              + "; ".join(chosen["failures"]) + ")")
+                           + ("" if chosen["fits"] is not False else " (over the frame period)"))
     t0 = time.perf_counter()
     for seed in seeds:
         frame = scene.frame(seed)
