@@ -1,6 +1,6 @@
 """Accuracy of the ``resonator`` DFT motif against the time-coded S-FT (issue 22); prints tables.
 
-``RADARSNN_DATA=/work/shared/data python benchmarks/resonator_accuracy.py`` runs:
+``python benchmarks/resonator_accuracy.py`` runs:
 
 * ``ti_table()`` — the real TI chirps (first 4, N = 1024 samples, positive bins): the
   magnitude-spectrum error against ``np.fft`` (RMSE of ``|X|`` over bins 1 … N/2−1, each

@@ -324,7 +324,7 @@ def seed003() -> RadarConfig:
 
 
 def openradar() -> RadarConfig:
-    """The OpenRadar capture's sensor (``shared/data/openradar``): a TI IWR, IQ sampling.
+    """The OpenRadar capture's sensor (``radar/data/openradar``): a TI IWR, IQ sampling.
 
     From the source notebook: 77.42 GHz start, 60 MHz/us, 2.5 Msps, 128 samples, idle
     30 us, ramp end 62 us (so ``T_c = 92 us``), 2 Tx. Assumed here (not stated): 4 Rx at

@@ -79,7 +79,7 @@ def workspaces(tmp_path_factory: pytest.TempPathFactory):
 
 
 def _environment() -> dict[str, str]:
-    from radar.loaders import default_data_dir  # $RADARSNN_DATA or ../shared/data
+    from radar.loaders import default_data_dir  # $RADARSNN_DATA or the shipped radar/data
 
     env = dict(os.environ)
     env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
