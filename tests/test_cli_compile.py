@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +74,17 @@ def test_compile_json_summary(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["target"] == "loihi2" and doc["segments"][0] == "spiking"
     assert load(tmp_path / "a").options["headroom"] == 1.5
+    lat = doc["latency"]  # the real-time fit, in seconds
+    assert lat["frame_period_s"] == pytest.approx(0.1) and isinstance(lat["fits"], bool)
+    assert lat["total_s"] == pytest.approx(lat["total_steps"] * 1e-5)  # loihi2: 10 µs a step
+
+
+def test_compile_prints_latency_frame_period_and_fit_in_seconds(tmp_path, capsys):
+    assert main(["compile", str(TI), "-o", str(tmp_path / "a")]) == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.strip().startswith("latency "))
+    assert re.fullmatch(r"  latency [\d.e+-]+ s per frame \([\d ]+ steps x 1e-05 s\) against a "
+                        r"frame period of 0\.1 s: (fits|does NOT fit.*)", line), line
 
 
 def test_an_edited_program_artifact_is_refused(compiled, tmp_path):

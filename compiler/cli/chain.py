@@ -234,6 +234,7 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         print(json.dumps({"artifact": str(folder), "chain": program.graph.name,
                           "target": program.target.name, "segments": segments,
                           "totals": totals,
+                          "latency": _latency_summary(report),
                           "accuracy": program.records.accuracy.to_dict()},
                          sort_keys=True, default=str))
         return 0
@@ -243,8 +244,19 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         if totals:
             print("  " + ", ".join(f"{k} {v:,}" for k, v in totals.items()
                                    if isinstance(v, int)))
+        if report is not None:
+            print("  " + report.latency_line())
         print(f"  {note}; full report: {folder / 'report.md'}")
     return 0
+
+
+def _latency_summary(report) -> dict:
+    """The real-time fit of ``compile --json``: seconds per frame, frame period, fits."""
+    if report is None:
+        return {}
+    lat = report.data["latency"]
+    return {k: lat.get(k) for k in ("total_steps", "total_s", "frame_period_s", "fits",
+                                    "max_step_s")}
 
 
 def _cmd_report(args: argparse.Namespace) -> int:

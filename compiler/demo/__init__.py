@@ -24,6 +24,7 @@ from pathlib import Path
 from compiler.demo.figures import rd_maps, spike_times
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
+from compiler.report.render import latency_line
 from radar.config import preset
 
 __all__ = ["DemoReport", "SceneReport", "TargetRow", "detection_peaks", "run_demo", "score_peaks"]
@@ -33,6 +34,12 @@ PRESETS = ("seed003", "carrada")
 
 def _fmt(x, spec: str = ".3f") -> str:
     return "-" if x is None else format(x, spec)
+
+
+def _latency(resources: dict) -> str:
+    """The report's latency line from a scene's ``latency_*`` resources."""
+    return latency_line({k[len("latency_"):]: v for k, v in resources.items()
+                         if k.startswith("latency_")})
 
 
 @dataclass
@@ -80,8 +87,9 @@ class DemoReport:
                 r = s.resources
                 if r:
                     lines.append(f"  resources on {s.target}: {r.get('neurons', 0):,} neurons, "
-                                 f"{r.get('synapses', 0):,} synapses, {r.get('cores', 0)} cores, "
-                                 f"{r.get('latency_total_steps', 0):,} steps per frame")
+                                 f"{r.get('synapses', 0):,} synapses, {r.get('cores', 0)} cores")
+                    if "latency_frame_period_s" in r:
+                        lines.append("  " + _latency(r))
                 lines.append("  time: " + ", ".join(f"{k} {v:.2f} s"
                                                     for k, v in s.timings_s.items()))
         if self.files:
@@ -113,6 +121,8 @@ class DemoReport:
                           f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
                           f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
                           "- resources: " + ", ".join(f"{k} {v}" for k, v in s.resources.items())]
+                if "latency_frame_period_s" in s.resources:
+                    lines += [f"- real time: {_latency(s.resources)}"]
             lines += ["", f"![RD maps](rd_{s.preset}.png)", ""]
             if s.target is not None:
                 lines += [f"![spike times](spikes_{s.preset}.png)", "",

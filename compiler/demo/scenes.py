@@ -133,7 +133,7 @@ def _resources(report) -> dict[str, Any]:
     d = report.data
     out = {k: v for k, v in d["totals"].items() if isinstance(v, int | float)}
     latency = d.get("latency") or {}
-    for key in ("total_steps", "total_s", "fits"):
+    for key in ("total_steps", "total_s", "frame_period_s", "fits", "max_step_s"):
         if key in latency:
             out[f"latency_{key}"] = latency[key]
     return out

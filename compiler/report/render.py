@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Report"]
+__all__ = ["Report", "latency_line"]
 
 _STAGE_COLUMNS = ("node", "motif", "inputs", "neurons", "synapses", "time_steps", "repetitions",
                   "multiplexed", "steps_per_frame", "cores", "synapse_memory_bits",
@@ -63,6 +63,37 @@ def _table(rows: list[dict], cols: tuple[str, ...]) -> list[str]:
     return out
 
 
+def latency_line(latency: dict) -> str:
+    """The real-time fit in seconds: latency per frame, frame period, whether it fits.
+
+    ``latency`` is a report's ``latency`` entry (the module docstring's schema).
+
+    Examples
+    --------
+    >>> print(latency_line({"total_steps": 263269, "total_s": 2.63269, "frame_period_s": 0.1,
+    ...                     "fits": False, "max_step_s": 3.798e-07,
+    ...                     "networks": [{"step_s": 1e-05}]}))  # doctest: +NORMALIZE_WHITESPACE
+    latency 2.633 s per frame (263 269 steps x 1e-05 s) against a frame period of 0.1 s:
+    does NOT fit (it would with steps of at most 3.798e-07 s)
+    >>> print(latency_line({"total_steps": 100, "total_s": None, "frame_period_s": 0.1,
+    ...                     "fits": None}))  # doctest: +NORMALIZE_WHITESPACE
+    latency 100 steps per frame, frame period 0.1 s: the target gives no step duration,
+    so no fit in seconds
+    """
+    steps, total_s = latency.get("total_steps"), latency.get("total_s")
+    period = latency["frame_period_s"]
+    if total_s is None:
+        return (f"latency {_fmt(steps)} steps per frame, frame period {_fmt(period)} s: the "
+                "target gives no step duration, so no fit in seconds")
+    step_s = next((r["step_s"] for r in latency.get("networks", ()) if r.get("step_s")), None)
+    per_step = f" x {step_s:g} s" if step_s else ""
+    fit = "fits" if latency["fits"] else "does NOT fit"
+    if not latency["fits"] and latency.get("max_step_s"):
+        fit += f" (it would with steps of at most {latency['max_step_s']:.4g} s)"
+    return (f"latency {total_s:.4g} s per frame ({_fmt(steps)} steps{per_step}) against a "
+            f"frame period of {period:g} s: {fit}")
+
+
 @dataclass
 class Report:
     """A resource report; ``data`` follows the schema in the module docstring."""
@@ -72,6 +103,10 @@ class Report:
     def to_json(self, indent: int = 2) -> str:
         """The report as JSON text."""
         return json.dumps(self.data, indent=indent, default=_json_default)
+
+    def latency_line(self) -> str:
+        """One line: latency per frame and frame period in seconds, and the fit."""
+        return latency_line(self.data["latency"])
 
     def to_markdown(self) -> str:
         """The report as Markdown tables."""
