@@ -222,6 +222,7 @@ def _warn_accuracy(program, calibration: dict, note: str) -> None:
 
 def _cmd_compile(args: argparse.Namespace) -> int:
     from backends import save_program
+    from compiler.report.render import totals_line
 
     program, note = _compile(args, args.target)
     folder = save_program(program, args.output, extra={
@@ -242,8 +243,7 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         print(f"compiled chain {program.graph.name!r} for {program.target.name} into {folder}/")
         print(f"  segments: {' → '.join(segments)}")
         if totals:
-            print("  " + ", ".join(f"{k} {v:,}" for k, v in totals.items()
-                                   if isinstance(v, int)))
+            print("  " + totals_line(totals))
         if report is not None:
             print("  " + report.latency_line())
         print(f"  {note}; full report: {folder / 'report.md'}")

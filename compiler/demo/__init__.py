@@ -24,7 +24,7 @@ from pathlib import Path
 from compiler.demo.figures import rd_maps, spike_times
 from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
-from compiler.report.render import latency_line
+from compiler.report.render import latency_line, totals_line
 from radar.config import preset
 
 __all__ = ["DemoReport", "SceneReport", "TargetRow", "detection_peaks", "run_demo", "score_peaks"]
@@ -86,8 +86,7 @@ class DemoReport:
                     f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}")
                 r = s.resources
                 if r:
-                    lines.append(f"  resources on {s.target}: {r.get('neurons', 0):,} neurons, "
-                                 f"{r.get('synapses', 0):,} synapses, {r.get('cores', 0)} cores")
+                    lines.append(f"  resources on {s.target}: {totals_line(r)}")
                     if "latency_frame_period_s" in r:
                         lines.append("  " + _latency(r))
                 lines.append("  time: " + ", ".join(f"{k} {v:.2f} s"
@@ -120,7 +119,7 @@ class DemoReport:
                           f"{s.spiking_n_false} false alarm peaks; cell sensitivity "
                           f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
                           f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
-                          "- resources: " + ", ".join(f"{k} {v}" for k, v in s.resources.items())]
+                          f"- resources: {totals_line(s.resources)}"]
                 if "latency_frame_period_s" in s.resources:
                     lines += [f"- real time: {_latency(s.resources)}"]
             lines += ["", f"![RD maps](rd_{s.preset}.png)", ""]

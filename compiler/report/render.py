@@ -31,7 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Report", "latency_line"]
+__all__ = ["TOTALS_HEADERS", "Report", "latency_line", "totals_line"]
+
+#: How the Markdown and the summaries name the totals whose keys alone would be ambiguous.
+TOTALS_HEADERS = {"synapses": "synapse_instances", "synapses_stored": "synapses_stored"}
 
 _STAGE_COLUMNS = ("node", "motif", "inputs", "neurons", "synapses", "time_steps", "repetitions",
                   "multiplexed", "steps_per_frame", "cores", "synapse_memory_bits",
@@ -52,13 +55,39 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def _table(rows: list[dict], cols: tuple[str, ...]) -> list[str]:
+def totals_line(totals: dict) -> str:
+    """The totals in one line, stored synapses and synapse instances each named.
+
+    A stored synapse is one weight entry held in a core's memory; an instance is one
+    connection of the network as wired (a shared matrix or a stencil kernel is stored
+    once and wired many times; docs/report.md).
+
+    Examples
+    --------
+    >>> print(totals_line({"inputs": 4, "neurons": 1064960, "synapses": 609157632,
+    ...                    "synapses_stored": 1032408, "cores": 92, "chips": 1,
+    ...                    "synapse_memory_bits": None}))
+    neurons 1 064 960, synapses stored 1 032 408 (synapse instances 609 157 632), cores 92, chips 1
+    """
+    parts = [f"neurons {_fmt(totals.get('neurons'))}"]
+    if "synapses_stored" in totals:
+        parts.append(f"synapses stored {_fmt(totals['synapses_stored'])} "
+                     f"(synapse instances {_fmt(totals.get('synapses'))})")
+    elif "synapses" in totals:
+        parts.append(f"synapse instances {_fmt(totals['synapses'])}")
+    parts += [f"{k} {_fmt(totals[k])}" for k in ("cores", "chips") if totals.get(k) is not None]
+    return ", ".join(parts)
+
+
+def _table(rows: list[dict], cols: tuple[str, ...],
+           headers: dict[str, str] | None = None) -> list[str]:
     # Not tabulate: a pipe table is these three lines once the cells are formatted (_fmt
     # does the numbers), and tabulate's "github" format pads every column, which would
     # change each stored report.md (artifacts are compared byte for byte) for a new core
     # dependency and no gain for a reader of the rendered Markdown.
     cols = tuple(c for c in cols if any(c in r for r in rows))
-    out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    names = [(headers or {}).get(c, c) for c in cols]
+    out = ["| " + " | ".join(names) + " |", "|" + "---|" * len(cols)]
     out += ["| " + " | ".join(_fmt(r.get(c)) for c in cols) + " |" for r in rows]
     return out
 
@@ -146,7 +175,8 @@ class Report:
             lines += ["", "## Number formats and dynamic-range mechanisms", ""]
             lines += _table(d["formats"], ("node", "item", "mechanism", "detail", "cost"))
         lines += ["", "## Totals", ""]
-        lines += _table([d["totals"]], tuple(d["totals"]))
+        lines += [totals_line(d["totals"]) + ".", ""]
+        lines += _table([d["totals"]], tuple(d["totals"]), TOTALS_HEADERS)
         lines += ["", f"## Spike traffic per frame ({d['traffic'].get('basis', '')})", ""]
         lines += _table([d["traffic"]], ("host_input", "inter_core", "inter_chip", "buffered"))
         if d["cores"]:
