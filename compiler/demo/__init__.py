@@ -21,8 +21,9 @@ import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from compiler.demo.figures import rd_maps, spike_times
+from compiler.demo.figures import rd_maps, shown_range_bins
 from compiler.demo.matching import detection_peaks, score_peaks
+from compiler.demo.rasters import spike_times
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
 from compiler.report.render import latency_line, totals_line
 from radar.config import preset
@@ -164,7 +165,12 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
             continue
         files = [rd_maps(out / f"rd_{name}.png", name, arrays, preset(name))]
         if arrays.first_spikes:
-            files.append(spike_times(out / f"spikes_{name}.png", name, arrays.first_spikes))
+            focus = {"rx": 0, **(dict(zip(("range", "doppler"), arrays.truth_bins[0],
+                                          strict=True)) if arrays.truth_bins else {})}
+            files.append(spike_times(
+                out / f"spikes_{name}.png", name, arrays.first_spikes, arrays.spike_shapes,
+                step_s=arrays.step_s, focus=focus,
+                max_bins=shown_range_bins(arrays.truth_bins, arrays.conventional_db.shape[0])))
         if arrays.report is not None:
             files.append(arrays.report.save_core_map(out / f"cores_{name}.png"))
             md = out / f"report_{name}.md"

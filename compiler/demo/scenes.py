@@ -12,7 +12,7 @@ detections against the conventional ones cell by cell:
 
 with :math:`S` the spiking and :math:`C` the conventional detected cells.  The
 S-FT RMSE is :func:`~compiler.lowering.dft_common.modulus_rmse` of the 2-D
-spectrum (moduli min–max normalised over the whole map, NOTES §1.1).
+spectrum (moduli min–max normalised over the whole map).
 """
 
 from __future__ import annotations
@@ -116,6 +116,10 @@ class SceneArrays:
     truth_bins: list[tuple[int, int]]
     first_spikes: dict[str, np.ndarray] = field(default_factory=dict)
     report: Any = None
+    truth_velocity_mps: list[float] = field(default_factory=list)
+    truth_aliased: list[bool] = field(default_factory=list)
+    spike_shapes: dict[str, dict[str, int]] = field(default_factory=dict)
+    step_s: float | None = None
 
 
 def _range_doppler(values: dict, graph, node: str) -> np.ndarray:
@@ -200,7 +204,9 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
                          n_false=c_score.n_false, seconds=0.0, target=target,
                          cells_conventional=int(c_mask.sum()))
     arrays = SceneArrays(conventional_db=_db(c_power), spiking_db=None, conventional_mask=c_mask,
-                         spiking_mask=None, truth_bins=truth)
+                         spiking_mask=None, truth_bins=truth,
+                         truth_velocity_mps=[float(t.velocity_mps) for t in frame.truth],
+                         truth_aliased=[bool(t.aliased) for t in frame.truth])
     s_found = [None] * len(truth)
     if spiking:
         t0 = time.perf_counter()
@@ -211,7 +217,7 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
         say(name, f"compiled for {target}")
         t0 = time.perf_counter()
         # the scene frame may exceed the calibration frame's range by a few ADC codes: clip
-        # (explicitly; the default policy warns) rather than print a warning in the demo
+        # (explicitly; the default policy refuses them)
         result = run_program(program, {"adc": frame.adc}, mode="auto", out_of_range="clip")
         timings["simulate"] = time.perf_counter() - t0
         say(name, "spiking chain simulated")
@@ -247,6 +253,8 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
                        if p.id in steps_of),
                       key=lambda p: topo.get(p.origin.get("node"), len(topo)))
         arrays.first_spikes = {p.id: steps_of[p.id][0].reshape(-1) for p in pops}
+        arrays.spike_shapes = {p.id: dict(p.shape) for p in pops}
+        arrays.step_s = getattr(program.target, "time_step_s", None)
     report.targets = [
         TargetRow(range_m=float(t.range_m), velocity_mps=float(t.velocity_mps),
                   rcs_dbsm=float(t.rcs_dbsm), range_bin=int(t.range_bin),
