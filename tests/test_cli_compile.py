@@ -57,15 +57,26 @@ def test_same_chain_gives_byte_identical_artifacts(compiled, tmp_path):
 
 
 def test_report_reads_a_compiled_artifact(compiled, capsys):
-    assert main(["report", str(compiled), "--format", "json"]) == 0
+    assert main(["report", str(compiled), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["target"] == "loihi2" and doc["totals"]["neurons"] > 0
-    assert main(["report", str(compiled), "--target", "loihi2", "--format", "json"]) == 0
+    assert main(["report", str(compiled), "--target", "loihi2", "--json"]) == 0
     capsys.readouterr()
     # another target than the artifact's: refused, naming both and the fix (was ignored)
     assert main(["report", str(compiled), "--target", "spinnaker2"]) == 1
     err = capsys.readouterr().err
     assert "compiled for loihi2" in err and "not spinnaker2" in err and "CHAIN.yaml" in err
+
+
+def test_report_format_json_is_deprecated_for_json(compiled, capsys):
+    assert main(["report", str(compiled), "--json"]) == 0
+    fresh = capsys.readouterr()
+    assert "deprecated" not in fresh.err and json.loads(fresh.out)["target"] == "loihi2"
+    assert main(["report", str(compiled), "--format", "json"]) == 0  # still works, and says so
+    old = capsys.readouterr()
+    assert json.loads(old.out) == json.loads(fresh.out)
+    assert old.err.splitlines()[0] == ("warning: --format json is deprecated and will be "
+                                       "removed; use --json (the same output)")
 
 
 def test_compile_json_summary(tmp_path, capsys):

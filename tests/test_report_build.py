@@ -122,7 +122,7 @@ def test_network_runs_by_hand():
 
 
 def test_carrada_chain_reports_on_loihi_from_the_cli(capsys):
-    assert main(["report", str(CARRADA), "--target", "loihi", "--format", "json"]) == 0
+    assert main(["report", str(CARRADA), "--target", "loihi", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = {r["node"]: r for r in data["stages"]}
     # rng (256 repetitions) and dop (1 024) multiplexed; the OS-CFAR stays spatial (Table 3)

@@ -83,7 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="show the full traceback of an error")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log what the compiler and simulator do (-v: info, -vv: debug)")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                help="the sub-command (radarsnn COMMAND --help for its options)")
     for name in COMMAND_MODULES:
         import_module(name).add_parsers(sub)
     for command in sub.choices.values():  # also after the command: radarsnn run ... --debug

@@ -281,6 +281,12 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
     if args.core_map:
         report.save_core_map(args.core_map)
+    if args.format is not None:
+        import sys
+
+        print(f"warning: --format {args.format} is deprecated and will be removed; "
+              + ("use --json" if args.format == "json" else "Markdown is the default")
+              + " (the same output)", file=sys.stderr)
     if args.format == "json" or args.json:
         print(report.to_json())
         if "synthetic noise" in note:  # stdout stays JSON; the caveat goes to stderr
@@ -304,7 +310,9 @@ def _motif_help() -> str:
 
 
 def _compile_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("chain", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("chain", type=Path, metavar="CHAIN.yaml",
+                   help="the chain file to compile (report: or a `radarsnn compile` artifact "
+                        "directory)")
     p.add_argument("--target", "-t", default="loihi2",
                    help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file "
                         "(default loihi2)")
@@ -328,7 +336,8 @@ def add_parsers(sub) -> None:
     """Add ``validate``, ``schema``, ``compile`` and ``report`` to ``sub``."""
     p = sub.add_parser("validate", help="check chain files and print their inferred types; "
                                         "every file is checked, one error line per bad one")
-    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml",
+                   help="one or more chain files to verify")
     p.add_argument("--json", action="store_true",
                    help="one JSON line per chain (a bad one: ok false, file, error, type, node)")
     p.set_defaults(func=_cmd_validate)
@@ -347,7 +356,9 @@ def add_parsers(sub) -> None:
 
     p = sub.add_parser("report", help="what a chain (or a compiled artifact) costs on a target")
     _compile_arguments(p)
-    p.add_argument("--format", choices=["md", "json"], default="md")
-    p.add_argument("--json", action="store_true", help="same as --format json")
+    p.add_argument("--json", action="store_true",
+                   help="print the report as JSON (default: Markdown)")
+    p.add_argument("--format", choices=["md", "json"], default=None,
+                   help="deprecated: --format json is --json, --format md the default")
     p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
     p.set_defaults(func=_cmd_report, target=None)  # None: loihi2, or an artifact's own

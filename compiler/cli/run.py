@@ -94,12 +94,17 @@ def add_parsers(sub) -> None:
     """Add ``run`` to ``sub``."""
     p = sub.add_parser("run", help="simulate a compiled artifact on inputs (.npy, .npz, .mat, "
                                    "TI .bin)")
-    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
+    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR",
+                   help="a compiled artifact directory (`radarsnn compile CHAIN.yaml -o DIR`); "
+                        "a chain file must be compiled first")
     p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]FILE",
                    help=f"input array per port, each port once: {INPUT_FORMS} (repeat for "
                         "several ports)")
     bin_layout_argument(p)
-    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
+    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto",
+                   help="simulation engine: step (every time step), closed (the spike steps "
+                        "of a fire-once feed-forward network computed directly), auto (closed "
+                        "for a network that is eligible, else step; the default)")
     p.add_argument("--out-of-range", choices=["reject", "warn", "clip"], default="reject",
                    help="input values above an encoder's calibrated range (a scene stronger "
                         "than the calibration data): refuse them with an error naming the "

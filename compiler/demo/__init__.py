@@ -55,8 +55,9 @@ class DemoReport:
         """A readable table per scene."""
         lines = []
         for s in self.scenes:
-            lines.append(f"== {s.preset}: chain {s.chain!r}, RD map {s.map_shape[0]} x "
-                         f"{s.map_shape[1]} (range x Doppler), seed {self.seed}, "
+            lines.append(f"== {s.preset}: chain {s.chain!r}, RD map "
+                         f"{' x '.join(map(str, s.map_shape))} ({' x '.join(s.map_axes)}), "
+                         f"seed {self.seed}, "
                          f"{s.seconds:.2f} s")
             lines.append(f"  {'range_m':>8} {'v_mps':>7} {'rcs':>5}  {'truth bin':>11}  "
                          f"{'conventional':>12}  {'spiking':>10}  status")

@@ -72,6 +72,7 @@ class SceneReport:
     preset: str
     chain: str
     map_shape: tuple[int, int]
+    """The RD map's shape in the chain's axis order (``map_axes``), as its arrays hold it."""
     targets: list[TargetRow]
     n_peaks: int
     n_clutter: int
@@ -88,6 +89,7 @@ class SceneReport:
     sft_rmse: float | None = None
     resources: dict[str, Any] = field(default_factory=dict)
     timings_s: dict[str, float] = field(default_factory=dict)
+    map_axes: tuple[str, ...] = ("doppler", "range")
 
     @property
     def n_targets(self) -> int:
@@ -199,7 +201,9 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
     c_mask, c_power = _range_doppler(conv, graph, "det"), _range_doppler(conv, graph, "rd")
     truth = [(int(t.range_bin), int(t.doppler_bin)) for t in frame.truth]
     c_score = score_peaks(c_mask, c_power, truth)
-    report = SceneReport(preset=name, chain=graph.name, map_shape=tuple(c_mask.shape),
+    det_axes = graph.infer_types()["det"].axes  # the chain's own order: [doppler, range]
+    report = SceneReport(preset=name, chain=graph.name, map_shape=tuple(det_axes.values()),
+                         map_axes=tuple(det_axes),
                          targets=[], n_peaks=c_score.n_peaks, n_clutter=c_score.n_clutter,
                          n_false=c_score.n_false, seconds=0.0, target=target,
                          cells_conventional=int(c_mask.sum()))
