@@ -251,3 +251,16 @@ def test_verbose_logs_each_pass_and_quiet_by_default(capsys, tmp_path):
     assert "compiler.passes.lower: node 'rng' -> motif" in capsys.readouterr().err
     main(["schema"])  # back to warnings only for the tests that follow
     capsys.readouterr()
+
+
+def test_run_on_a_chain_file_says_to_compile_it_first(capsys, tmp_path):
+    """It said '…/manifest.json: cannot read (Not a directory)'."""
+    np.save(tmp_path / "x.npy", np.zeros(1024))
+    assert main(["run", str(TI), "-i", str(tmp_path / "x.npy")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == (f"error: {TI} is a chain file, not a compiled artifact: compile it first "
+                   f"(radarsnn compile {TI} -o DIR), then run the directory (radarsnn run DIR "
+                   "-i …)")
+    (tmp_path / "notes.txt").write_text("x")
+    assert main(["run", str(tmp_path / "notes.txt"), "-i", str(tmp_path / "x.npy")]) == 1
+    assert "is a file, not a compiled artifact directory" in capsys.readouterr().err

@@ -181,3 +181,34 @@ def test_read_ti_bin_is_4d_unless_squeezed(tmp_path):
     one = read_ti_bin(tmp_path / "adc.bin", layout, n_frames=1)
     assert one.shape == (1, 1, 2, 4)
     assert read_ti_bin(tmp_path / "adc.bin", layout, n_frames=1, squeeze=True).shape == (1, 2, 4)
+
+
+def test_version_imports_no_command_module():
+    """``radarsnn --version`` took 2.1 s importing every sub-command's stack (numpy, scipy …)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom compiler.cli import main\ntry:\n    main(['--version'])\n"
+            "except SystemExit as e:\n    assert e.code == 0\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'pydantic', 'yaml', 'matplotlib', "
+            "'compiler.cli.chain') if m in sys.modules))")
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=root, env={**__import__("os").environ, "PYTHONPATH": str(root)},
+                          check=True)
+    assert done.stdout.splitlines() == [done.stdout.splitlines()[0], "[]"]
+    assert done.stdout.startswith("radarsnn ")
+
+
+def test_each_command_is_added_by_the_module_main_imports_for_it():
+    import argparse
+
+    from compiler.cli import COMMAND_MODULES, COMMAND_OF, build_parser
+
+    def commands(parser):
+        (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return set(sub.choices)
+
+    assert commands(build_parser()) == set(COMMAND_OF)
+    for name, module in COMMAND_OF.items():
+        assert module in COMMAND_MODULES and name in commands(build_parser([module]))

@@ -25,6 +25,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from backends import is_program, load
 
+    _refuse_a_file(args.artifact)
     loaded = load(args.artifact)
     if is_program(args.artifact):
         ports = loaded.graph.input_ids()
@@ -51,6 +52,31 @@ def _cmd_run(args: argparse.Namespace) -> int:
     elif not args.quiet:
         print(result.summary())
     return 0
+
+
+def _refuse_a_file(path: Path) -> None:
+    """``run`` takes a compiled artifact directory: say what to do with a chain or other file.
+
+    Examples
+    --------
+    >>> _refuse_a_file(Path("examples/chains/ti_range.yaml"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ir.errors.ArtifactError: examples/chains/ti_range.yaml is a chain file, ...: compile it ...
+    """
+    from ir.errors import ArtifactError
+
+    if not path.is_file():
+        return
+    if path.name in ("program.json", "manifest.json"):
+        raise ArtifactError(f"{path} is a file of an artifact: give its directory "
+                            f"(radarsnn run {path.parent} -i …)")
+    if path.suffix.lower() in (".yaml", ".yml", ".json"):
+        raise ArtifactError(f"{path} is a chain file, not a compiled artifact: compile it first "
+                            f"(radarsnn compile {path} -o DIR), then run the directory "
+                            "(radarsnn run DIR -i …)")
+    raise ArtifactError(f"{path} is a file, not a compiled artifact directory: give the "
+                        "directory `radarsnn compile CHAIN.yaml -o DIR` wrote")
 
 
 def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_range: str):
