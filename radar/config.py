@@ -148,7 +148,7 @@ class RadarConfig(RadarModel):
             raise RadarConfigError(
                 f"RadarConfig '{self.name}': idle_s = {self.idle_s:g} s leaves no ramp in "
                 f"chirp_period_s = {self.chirp_period_s:g} s; make idle_s < chirp_period_s"
-            )
+           )
         window_end_s = self.adc_start_s + self.n_samples / self.fs_hz
         if window_end_s > ramp_s * (1 + _REL_TOL):
             raise RadarConfigError(
@@ -156,7 +156,7 @@ class RadarConfig(RadarModel):
                 f"n_samples/fs_hz = {window_end_s * 1e6:.4g} us, after the ramp ends at "
                 f"chirp_period_s - idle_s = {ramp_s * 1e6:.4g} us; raise fs_hz, lower "
                 "n_samples or adc_start_s, or lengthen the chirp"
-            )
+           )
         active_s = self.n_tx * self.n_chirps * self.chirp_period_s
         if active_s > (1 + _REL_TOL) / self.frame_rate_hz:
             raise RadarConfigError(
@@ -164,7 +164,7 @@ class RadarConfig(RadarModel):
                 f"chirp_period_s = {active_s * 1e3:.4g} ms, longer than the frame period "
                 f"1/frame_rate_hz = {1e3 / self.frame_rate_hz:.4g} ms; lower frame_rate_hz "
                 "or n_chirps"
-            )
+           )
         return self
 
     @property
@@ -293,11 +293,11 @@ def carrada() -> RadarConfig:
         n_chirps=64, chirp_period_s=36e-6, idle_s=6e-6, adc_start_s=4e-6,
         tx_positions_lambda=(0.0, 2.0), rx_positions_lambda=(0.0, 0.5, 1.0, 1.5),
         adc_bits=16, iq=True, frame_rate_hz=10.0,
-    )
+   )
 
 
 def seed003() -> RadarConfig:
-    """Paper 003's sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
+    """López-Randulfe et al.'s (2021) sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
 
     The paper gives a 275 MHz sweep over a 54 us chirp; the ADC samples the whole ramp,
     so ``fs = 1024 / 54 us = 18.96 MHz`` and ``S = 275 MHz / 54 us``. Then
@@ -320,7 +320,7 @@ def seed003() -> RadarConfig:
         name="seed003", carrier_hz=77e9, slope_hz_per_s=275e6 / 54e-6, fs_hz=1024 / 54e-6,
         n_samples=1024, n_chirps=128, chirp_period_s=54e-6, idle_s=0.0, adc_start_s=0.0,
         adc_bits=12, iq=False, frame_rate_hz=20.0,
-    )
+   )
 
 
 def openradar() -> RadarConfig:
@@ -346,7 +346,7 @@ def openradar() -> RadarConfig:
         n_samples=128, n_chirps=64, chirp_period_s=92e-6, idle_s=30e-6, adc_start_s=6e-6,
         tx_positions_lambda=(0.0, 2.0), rx_positions_lambda=(0.0, 0.5, 1.0, 1.5),
         adc_bits=16, iq=True, frame_rate_hz=10.0,
-    )
+   )
 
 
 PRESETS: dict[str, Callable[[], RadarConfig]] = {
@@ -387,5 +387,5 @@ def preset(name: str) -> RadarConfig:
     if factory is None:
         raise RadarConfigError(
             f"unknown radar preset {name!r}; presets: {', '.join(sorted(PRESETS))}"
-        )
+       )
     return factory()

@@ -39,8 +39,8 @@ def _fmt(x, spec: str = ".3f") -> str:
 
 def _latency(resources: dict) -> str:
     """The report's latency line from a scene's ``latency_*`` resources."""
-    return latency_line({k[len("latency_"):]: v for k, v in resources.items()
-                         if k.startswith("latency_")})
+    lat = {k[len("latency_"):]: v for k, v in resources.items() if k.startswith("latency_")}
+    return latency_line({**lat, "networks": [{"step_s": lat.get("step_s")}]})
 
 
 @dataclass

@@ -142,6 +142,9 @@ def _resources(report) -> dict[str, Any]:
     for key in ("total_steps", "total_s", "frame_period_s", "fits", "max_step_s"):
         if key in latency:
             out[f"latency_{key}"] = latency[key]
+    steps = [r["step_s"] for r in latency.get("networks", ()) if r.get("step_s")]
+    if steps:
+        out["latency_step_s"] = steps[0]
     return out
 
 
