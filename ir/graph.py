@@ -273,11 +273,10 @@ class Graph:
         for id in self:
             op, given = self.op(id), len(self.inputs_of(id))
             if given < op.arity:
-                what = "no input" if given == 0 else f"{given} of its {op.arity} inputs"
-                raise op.fail(id, f"{what}; it takes {op.arity} (give "
-                                  + ("'input: <node id>'" if op.arity == 1 else
-                                     "'inputs: [<node id>, ...]'")
-                                  + f"; nodes: {list(self._index)})")
+                plural = "input" if op.arity == 1 else "inputs"
+                give = "'input: <node id>'" if op.arity == 1 else "'inputs: [<node id>, ...]'"
+                raise op.fail(id, f"takes {op.arity} {plural}, got {given}; give {give} "
+                                  f"(nodes: {list(self._index)})")
         for id in self:
             if not self.op(id).is_output and self._g.out_degree(id) == 0:
                 raise IRError(
