@@ -12,9 +12,9 @@ For each hardware profile (loihi2, loihi, spinnaker2, unbounded) the chain is co
   target, clutter or leakage) of both chains;
 * ``carrada`` scenes with one target 30, 45 and 60 dB below the strongest return (the
   fast car): does the spiking chain find what the conventional chain finds?
-* the real TI chirps (``shared/data/ti_chirps``): the range S-FT at T = 256, calibrated on
-  the *other* three chirps (leave one out), RMSE of the NOTES §1.2 protocol;
-* the two real OpenRadar TI captures (``shared/data/openradar``), each calibrated on the
+* the real TI chirps (``radar/data/ti_chirps``): the range S-FT at T = 256, calibrated on
+  the *other* three chirps (leave one out), RMSE of the S-FT accuracy protocol;
+* the two real OpenRadar TI captures (``radar/data/openradar``), each calibrated on the
   other: cell sensitivity / precision of a range–Doppler OS-CFAR chain.
 
 and the hard cases of :data:`compiler.demo.hard_cases.HARD_CASES` (``--case`` picks some and

@@ -3,7 +3,7 @@
 ``python benchmarks/fourier.py`` runs every study defined here:
 
 * ``time_coded_study()`` — the time-coded S-FT (motif ``time``) on the real TI chirps
-  (first N samples, 4 chirps, NOTES §1.2 protocol): RMSE vs T = 32 … 512 for both
+  (first N samples, 4 chirps, S-FT accuracy protocol): RMSE vs T = 32 … 512 for both
   calibration policies and both charging schedules (plus the schedule ``auto`` picks);
   the spiking magnitudes' error against the true modulus; the compiled range S-FT →
   Doppler S-FT → magnitude chain on the carrada and seed003 presets.
@@ -53,7 +53,7 @@ def _sft_graph(n: int) -> Graph:
 
 
 def sft_rmse_table(ns=(256, 1024), steps=STEPS) -> None:
-    """RMSE (NOTES §1.2) of the time-coded S-FT on the TI chirps."""
+    """RMSE (the S-FT accuracy protocol) of the time-coded S-FT on the TI chirps."""
     chirps, _ = load_ti_chirps()
     print("time-coded S-FT on the TI chirps: RMSE (bins 1..N/2-1, joint min-max, mean of 4)")
     print("paper / authors' code at T=256: 0.0108 (N=256), 0.0149 (N=1024)")
@@ -203,7 +203,7 @@ def fft_study(ns=(256, 512, 1024), steps=(100, 256)) -> None:
     est = sfft_resources(512, 100)
     print(f"\nS-FFT resources, N=512, T=100 (L = log4 N = {est.n_layers}): estimate "
           f"{est.neurons} neurons, {est.synapses} synapses, {est.steps} steps "
-          "(paper 000 Table 3: 4 608, 37 888, 550)")
+          "(Vogginger et al. 2022 Table 3: 4 608, 37 888, 550)")
     chirps, _ = load_ti_chirps()
     for n in ns:
         g = Graph.from_dict({"name": f"ti-{n}", "nodes": [

@@ -1,10 +1,10 @@
 """Accuracy of the ``resonator`` DFT motif against the time-coded S-FT (issue 22); prints tables.
 
-``RADARSNN_DATA=/work/shared/data python benchmarks/resonator_accuracy.py`` runs:
+``python benchmarks/resonator_accuracy.py`` runs:
 
 * ``ti_table()`` — the real TI chirps (first 4, N = 1024 samples, positive bins): the
   magnitude-spectrum error against ``np.fft`` (RMSE of ``|X|`` over bins 1 … N/2−1, each
-  spectrum min–max normalised) and the S-FT protocol's Re/Im RMSE (NOTES §1.2), for the
+  spectrum min–max normalised) and the S-FT accuracy protocol's Re/Im RMSE, for the
   resonator (read-out ``time`` with T steps, and ``graded``) and the time-coded S-FT
   compiled to the same number of steps per frame, on ``unbounded`` and ``loihi2``;
 * ``drift_table()`` — the fixed-point drift bound and the measured error of the loihi2

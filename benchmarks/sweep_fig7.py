@@ -1,4 +1,5 @@
-"""Paper 000's Fig. 7 as a sweep: wall time of ``examples/sweeps/fig7.yaml`` on a LocalCluster.
+"""Vogginger et al.'s (2022) Fig. 7 as a sweep: wall time of ``examples/sweeps/fig7.yaml`` on a
+LocalCluster.
 
 1 000 simulated CARRADA-like maps (dB) x 8 step counts x {OS, CA} spiking CFAR
 against the conventional CFAR (issue 10 acceptance: < 10 minutes on 2 cores).

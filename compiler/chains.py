@@ -186,7 +186,7 @@ def range_cfar_chain(config: RadarConfig, *, window: str = "hann",
 
 
 def capture_chain(n_chirps: int = 128, n_samples: int = 128) -> Graph:
-    """The range–Doppler OS-CFAR chain of the OpenRadar TI captures (``shared/data/openradar``).
+    """The range–Doppler OS-CFAR chain of the OpenRadar TI captures (``radar/data/openradar``).
 
     One complex frame ``[chirp, sample]`` (no receiver axis, no ADC full scale: the
     captures are decoded codes), Hann windows, fftshifted Doppler, power, OS-CFAR

@@ -67,7 +67,8 @@ EXTRA_OPTIONS = {
     "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
     "frame_rate_hz": "report: frames per second (default from the chain or 10)",
     "real_bits": "report: bits per real sample of frame I/O (default 16)",
-    "n_angle_bins": "report: angle bins of the RA map (default 256)",
+    "n_angle_bins": "report: angle bins of an RA map the chain does not compute (CARRADA: 256; "
+                    "default none: an ra_map row only when the chain computes one)",
     "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
     "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
     # typed fields of their pass or motif (the description says what the value must be);
@@ -190,7 +191,7 @@ def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> l
                    Split(repetitions=mode), Place(repetitions=mode),
                    ReportPass(frame_rate_hz=opts.get("frame_rate_hz"),
                               real_bits=int(opts.get("real_bits", 16)),
-                              n_angle_bins=int(opts.get("n_angle_bins", 256)))]
+                              n_angle_bins=opts.get("n_angle_bins"))]
     return passes
 
 

@@ -257,8 +257,10 @@ class Graph:
         """Check the whole graph; return nothing if it is valid.
 
         Checks, in order: the graph is not empty; no self-loops; no cycles; no
-        unknown input ids; every value is used (only ``output`` nodes may be
-        unread); every node's op accepts its input types.
+        unknown input ids; no node with fewer inputs than its op takes (so a node
+        that lacks ``input`` is named, not the node it should have read); every value
+        is used (only ``output`` nodes may be unread); every node's op accepts its
+        input types.
 
         Raises
         ------
@@ -268,6 +270,13 @@ class Graph:
         if not self._index:
             raise IRError(f"graph {self.name!r} has no nodes; add an input node")
         self._check_structure()
+        for id in self:
+            op, given = self.op(id), len(self.inputs_of(id))
+            if given < op.arity:
+                plural = "input" if op.arity == 1 else "inputs"
+                give = "'input: <node id>'" if op.arity == 1 else "'inputs: [<node id>, ...]'"
+                raise op.fail(id, f"takes {op.arity} {plural}, got {given}; give {give} "
+                                  f"(nodes: {list(self._index)})")
         for id in self:
             if not self.op(id).is_output and self._g.out_degree(id) == 0:
                 raise IRError(

@@ -62,7 +62,7 @@ def carrada() -> RadarConfig:
 
 
 def seed003() -> RadarConfig:
-    """Paper 003's sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
+    """López-Randulfe et al.'s (2021) sensor: 77 GHz, 1 Tx x 1 Rx, 1024 real samples x 128 chirps.
 
     The paper gives a 275 MHz sweep over a 54 us chirp; the ADC samples the whole ramp,
     so ``fs = 1024 / 54 us = 18.96 MHz`` and ``S = 275 MHz / 54 us``. Then
@@ -89,7 +89,7 @@ def seed003() -> RadarConfig:
 
 
 def openradar() -> RadarConfig:
-    """The OpenRadar capture's sensor (``shared/data/openradar``): a TI IWR, IQ sampling.
+    """The OpenRadar capture's sensor (``radar/data/openradar``): a TI IWR, IQ sampling.
 
     From the source notebook: 77.42 GHz start, 60 MHz/us, 2.5 Msps, 128 samples, idle
     30 us, ramp end 62 us (so ``T_c = 92 us``), 2 Tx. Assumed here (not stated): 4 Rx at
@@ -209,5 +209,5 @@ def preset(name: str) -> RadarConfig:
     if factory is None:
         raise RadarConfigError(
             f"unknown radar preset {name!r}; presets: {', '.join(sorted(PRESETS))}"
-        )
+       )
     return factory()

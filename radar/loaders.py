@@ -1,9 +1,9 @@
-"""Loaders for the real radar captures in ``shared/data`` (see its README.md).
+"""Loaders for the real radar captures shipped in ``radar/data`` (see its README.md).
 
 Files are read with ``numpy.load(..., allow_pickle=False)``: loading never runs code. Every
 file is checked for its expected dtype and shape; a missing, truncated or malformed file
 raises :class:`ir.errors.RadarConfigError` naming the file and what was expected. The
-captures root is ``$RADARSNN_DATA`` or ``<repo>/../shared/data`` (:func:`default_data_dir`).
+captures root is ``$RADARSNN_DATA`` or the package's own ``radar/data`` (:func:`default_data_dir`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import numpy as np
 
 from ir.errors import RadarConfigError
 
-__all__ = ["OPENRADAR_CAPTURES", "default_data_dir", "load_openradar", "load_ti_chirps"]
+__all__ = ["OPENRADAR_CAPTURES", "SHIPPED_DATA_DIR", "default_data_dir", "load_openradar",
+           "load_ti_chirps"]
 
 DATA_ENV_VAR = "RADARSNN_DATA"
 
@@ -27,9 +28,15 @@ OPENRADAR_CAPTURES: dict[str, tuple[int, int]] = {
 
 _UINT16_SPAN = 65536
 
+SHIPPED_DATA_DIR = Path(__file__).resolve().parent / "data"
+"""The captures shipped with the package (``radar/data``: ``ti_chirps/``, ``openradar/``)."""
+
 
 def default_data_dir() -> Path:
-    """The folder of real captures: ``$RADARSNN_DATA`` if set, else ``<repo>/../shared/data``.
+    """The folder of real captures: ``$RADARSNN_DATA`` if set, else the shipped ``radar/data``.
+
+    The shipped folder is package data: an editable and a regular install both hold it (its
+    README.md names each capture's origin and licence).
 
     Returns
     -------
@@ -44,7 +51,7 @@ def default_data_dir() -> Path:
     env = os.environ.get(DATA_ENV_VAR)
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[1].parent / "shared" / "data"
+    return SHIPPED_DATA_DIR
 
 
 def _folder(directory: str | Path | None, sub: str) -> Path:
@@ -53,7 +60,7 @@ def _folder(directory: str | Path | None, sub: str) -> Path:
     folder = root / sub
     if not folder.is_dir():
         raise RadarConfigError(
-            f"capture folder {folder} does not exist; pass directory=<path to shared/data> "
+            f"capture folder {folder} does not exist; pass directory=<captures root> "
             f"or set the environment variable {DATA_ENV_VAR} to the folder that holds "
             f"'{sub}/'"
         )

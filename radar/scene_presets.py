@@ -15,7 +15,7 @@ __all__ = ["SCENE_PRESETS", "carrada_scene", "seed003_scene"]
 
 
 def seed003_scene() -> Scene:
-    """Paper 003's scene: pedestrians at 5 and 9 m, a car at 100 m, plus packaging.
+    """López-Randulfe et al.'s (2021) scene: pedestrians at 5 and 9 m, a car at 100 m, packaging.
 
     Targets at 5, 9, 100 m moving at 0, 2, 14 m/s with RCS 0, 5, 40 dBsm (paper). The
     20 mm sensor packaging (-40 dBsm) and the 1 cm bumper (-23 dBsm) become near-range

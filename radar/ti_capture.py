@@ -31,7 +31,8 @@ import numpy as np
 from ir.errors import RadarConfigError
 from radar._checks import _positive_int
 
-__all__ = ["MAX_CAPTURE_BYTES", "TI_AXES", "TI_DEVICES", "TiBinLayout", "read_ti_bin"]
+__all__ = ["LAYOUT_KEYS", "MAX_CAPTURE_BYTES", "TI_AXES", "TI_DEVICES", "TiBinLayout",
+           "read_ti_bin"]
 
 #: Axis names of :func:`read_ti_bin`'s result, the order of the chains' ``adc_input`` cubes.
 TI_AXES = ("frame", "rx", "chirp", "sample")
@@ -44,6 +45,11 @@ TI_DEVICES = {"xwr16xx": "xwr16xx", "xwr18xx": "xwr16xx", "iwr6843": "xwr16xx",
 MAX_CAPTURE_BYTES = 4 << 30
 
 _LANES_XWR14XX = 4
+
+
+#: ``--bin-layout`` key -> the :class:`TiBinLayout` field it sets (either name is accepted).
+LAYOUT_KEYS = {"samples": "n_samples", "chirps": "n_chirps", "rx": "n_rx", "tx": "n_tx",
+               "bits": "adc_bits"}
 
 
 @dataclass(frozen=True)
@@ -127,7 +133,10 @@ class TiBinLayout:
 
         ``samples=N,chirps=M,rx=R`` are required; ``tx=T`` (default 1), ``complex`` or
         ``real`` (default complex), ``device=D`` (default xwr16xx) and ``bits=B``
-        (default 16) are optional. ``chirps`` counts chirps per TX (the loops).
+        (default 16) are optional. ``chirps`` counts chirps per TX (the loops). Each key
+        may also be spelled as the field it sets (:data:`LAYOUT_KEYS`): ``n_samples``,
+        ``n_chirps``, ``n_rx``, ``n_tx``, ``adc_bits``, ``complex=true|false`` — the names
+        of ``TiBinLayout(...)``.
 
         Raises
         ------
@@ -139,6 +148,9 @@ class TiBinLayout:
         --------
         >>> TiBinLayout.parse("samples=256,chirps=64,rx=4,tx=2,complex").shape(frames=1)
         (1, 8, 64, 256)
+        >>> cli = TiBinLayout.parse("n_samples=256,n_chirps=64,n_rx=4,n_tx=2,complex=false")
+        >>> cli == TiBinLayout(n_samples=256, n_chirps=64, n_rx=4, n_tx=2, complex=False)
+        True
         >>> TiBinLayout.parse("samples=256,rx=4")
         Traceback (most recent call last):
         ...
@@ -146,13 +158,14 @@ class TiBinLayout:
 give samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]
         """
         usage = "samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]"
-        keys = {"samples": "n_samples", "chirps": "n_chirps", "rx": "n_rx", "tx": "n_tx",
-                "bits": "adc_bits"}
+        keys = {**LAYOUT_KEYS, **{f: f for f in LAYOUT_KEYS.values()}}
         fields: dict[str, object] = {}
         for item in (part.strip() for part in str(text).split(",")):
             key, sep, value = item.partition("=")
             if not sep and item in ("complex", "real"):
                 fields["complex"] = item == "complex"
+            elif sep and key == "complex" and value.lower() in ("true", "false"):
+                fields["complex"] = value.lower() == "true"
             elif sep and key == "device":
                 fields["device"] = value
             elif sep and key in keys:
@@ -164,7 +177,7 @@ give samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]
                 raise RadarConfigError(f"--bin-layout {text!r}: {item!r} is not one of the "
                                        f"items of {usage}")
         for key in ("samples", "chirps", "rx"):
-            if keys[key] not in fields:
+            if LAYOUT_KEYS[key] not in fields:
                 raise RadarConfigError(f"--bin-layout {text!r} lacks {key}=; give {usage}")
         return cls(**fields)
 
@@ -191,9 +204,14 @@ give samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]
 
 
 def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
-                n_frames: int | None = None,
-                max_bytes: int = MAX_CAPTURE_BYTES) -> np.ndarray:
+                n_frames: int | None = None, max_bytes: int = MAX_CAPTURE_BYTES,
+                squeeze: bool = False) -> np.ndarray:
     """Read a TI raw ADC capture into ``[frame, rx, chirp, sample]`` ADC codes.
+
+    The result is always 4-D — one frame too, as ``(1, rx, chirp, sample)`` — unless
+    ``squeeze=True``, which drops the frame axis of a one-frame result (the
+    ``[rx, chirp, sample]`` cube a chain's ``adc_input`` takes; ``radarsnn run`` reads a
+    one-frame ``.bin`` that way).
 
     Parameters
     ----------
@@ -207,12 +225,15 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
         How many frames to read (default: all from ``first_frame``).
     max_bytes : int
         Most bytes the decoded array may take.
+    squeeze : bool
+        Drop the frame axis when the result holds one frame (default False: always 4-D).
 
     Returns
     -------
     numpy.ndarray
         complex128 (IQ) or float64 (real), shape ``layout.shape(frames)``, axes
-        :data:`TI_AXES`; virtual channel ``tx * n_rx + rx``.
+        :data:`TI_AXES` (with ``squeeze`` and one frame: ``TI_AXES[1:]``); virtual channel
+        ``tx * n_rx + rx``.
 
     Raises
     ------
@@ -232,6 +253,10 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
     ...     adc = read_ti_bin(Path(tmp) / "adc.bin", TiBinLayout(4, 1, 1))
     >>> adc.shape, adc[0, 0, 0].tolist()
     ((1, 1, 1, 4), [(1+10j), (2+20j), (3+30j), (4+40j)])
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     words.tofile(Path(tmp) / "adc.bin")
+    ...     read_ti_bin(Path(tmp) / "adc.bin", TiBinLayout(4, 1, 1), squeeze=True).shape
+    (1, 1, 4)
     """
     path = Path(path)
     frame_bytes = layout.frame_bytes
@@ -268,7 +293,8 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
     with open(path, "rb") as f:
         raw = np.fromfile(f, dtype="<i2", count=count * layout.words_per_frame,
                           offset=first * frame_bytes)
-    return _decode(raw.astype(np.int32), layout, count)
+    cube = _decode(raw.astype(np.int32), layout, count)
+    return cube[0] if squeeze and count == 1 else cube
 
 
 def _decode(words: np.ndarray, layout: TiBinLayout, frames: int) -> np.ndarray:

@@ -30,6 +30,8 @@ from ir import Graph, evaluate
 from ir import errors as _errors
 from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
 from ir.ops import DFT, Input, Magnitude, Output, Window
+from radarsnn._chain import *  # noqa: F403  (every IR op, chains, radar presets, scenes)
+from radarsnn._chain import __all__ as _chain_names
 from radarsnn.compile import compile_graph
 
 try:
@@ -41,5 +43,5 @@ __all__ = [
     "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
     "check_accuracy", "compile_graph",
     "evaluate", "load", "load_program", "run_program", "save", "save_program",
-    "simulate", *_errors.__all__,
+    "simulate", *_errors.__all__, *_chain_names,
 ]

@@ -1,4 +1,4 @@
-"""Shared test fixtures: the real captures in ``../shared/data`` and hypothesis profiles."""
+"""Shared test fixtures: the real captures shipped in ``radar/data`` and hypothesis profiles."""
 
 from __future__ import annotations
 
@@ -17,23 +17,24 @@ settings.register_profile(
 )
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
 
-_ROOT = Path(__file__).resolve().parents[1]
-
-
 def data_dir() -> Path:
-    """Where the real captures live: ``$RADARSNN_DATA`` or ``<repo>/../shared/data``."""
-    env = os.environ.get("RADARSNN_DATA")
-    return Path(env) if env else _ROOT.parent / "shared" / "data"
+    """Where the real captures live: ``$RADARSNN_DATA`` or the shipped ``radar/data``."""
+    from radar.loaders import default_data_dir
+
+    return default_data_dir()
 
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
-    """The folder of real captures; skips (with the reason) where it is absent."""
+    """The folder of real captures; fails (with the reason) where it is absent.
+
+    The captures ship with the package, so only a ``$RADARSNN_DATA`` naming a folder without
+    them gets here.
+    """
     path = data_dir()
     if not (path / "ti_chirps" / "data_tum.npy").is_file():
-        if os.environ.get("CI"):
-            pytest.fail(f"real captures not found at {path}; CI must have shared/ beside the clone")
-        pytest.skip(f"real captures not found at {path}; set RADARSNN_DATA to shared/data")
+        pytest.fail(f"real captures not found at {path}; unset RADARSNN_DATA to read the "
+                    f"copy shipped in radar/data, or point it at a folder holding ti_chirps/")
     return path
 
 

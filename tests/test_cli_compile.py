@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -56,15 +57,26 @@ def test_same_chain_gives_byte_identical_artifacts(compiled, tmp_path):
 
 
 def test_report_reads_a_compiled_artifact(compiled, capsys):
-    assert main(["report", str(compiled), "--format", "json"]) == 0
+    assert main(["report", str(compiled), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["target"] == "loihi2" and doc["totals"]["neurons"] > 0
-    assert main(["report", str(compiled), "--target", "loihi2", "--format", "json"]) == 0
+    assert main(["report", str(compiled), "--target", "loihi2", "--json"]) == 0
     capsys.readouterr()
     # another target than the artifact's: refused, naming both and the fix (was ignored)
     assert main(["report", str(compiled), "--target", "spinnaker2"]) == 1
     err = capsys.readouterr().err
     assert "compiled for loihi2" in err and "not spinnaker2" in err and "CHAIN.yaml" in err
+
+
+def test_report_format_json_is_deprecated_for_json(compiled, capsys):
+    assert main(["report", str(compiled), "--json"]) == 0
+    fresh = capsys.readouterr()
+    assert "deprecated" not in fresh.err and json.loads(fresh.out)["target"] == "loihi2"
+    assert main(["report", str(compiled), "--format", "json"]) == 0  # still works, and says so
+    old = capsys.readouterr()
+    assert json.loads(old.out) == json.loads(fresh.out)
+    assert old.err.splitlines()[0] == ("warning: --format json is deprecated and will be "
+                                       "removed; use --json (the same output)")
 
 
 def test_compile_json_summary(tmp_path, capsys):
@@ -73,6 +85,17 @@ def test_compile_json_summary(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["target"] == "loihi2" and doc["segments"][0] == "spiking"
     assert load(tmp_path / "a").options["headroom"] == 1.5
+    lat = doc["latency"]  # the real-time fit, in seconds
+    assert lat["frame_period_s"] == pytest.approx(0.1) and isinstance(lat["fits"], bool)
+    assert lat["total_s"] == pytest.approx(lat["total_steps"] * 1e-5)  # loihi2: 10 µs a step
+
+
+def test_compile_prints_latency_frame_period_and_fit_in_seconds(tmp_path, capsys):
+    assert main(["compile", str(TI), "-o", str(tmp_path / "a")]) == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.strip().startswith("latency "))
+    assert re.fullmatch(r"  latency [\d.e+-]+ s per frame \([\d ]+ steps x 1e-05 s\) against a "
+                        r"frame period of 0\.1 s: (fits|does NOT fit.*)", line), line
 
 
 def test_an_edited_program_artifact_is_refused(compiled, tmp_path):
@@ -228,3 +251,16 @@ def test_verbose_logs_each_pass_and_quiet_by_default(capsys, tmp_path):
     assert "compiler.passes.lower: node 'rng' -> motif" in capsys.readouterr().err
     main(["schema"])  # back to warnings only for the tests that follow
     capsys.readouterr()
+
+
+def test_run_on_a_chain_file_says_to_compile_it_first(capsys, tmp_path):
+    """It said '…/manifest.json: cannot read (Not a directory)'."""
+    np.save(tmp_path / "x.npy", np.zeros(1024))
+    assert main(["run", str(TI), "-i", str(tmp_path / "x.npy")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == (f"error: {TI} is a chain file, not a compiled artifact: compile it first "
+                   f"(radarsnn compile {TI} -o DIR), then run the directory (radarsnn run DIR "
+                   "-i …)")
+    (tmp_path / "notes.txt").write_text("x")
+    assert main(["run", str(tmp_path / "notes.txt"), "-i", str(tmp_path / "x.npy")]) == 1
+    assert "is a file, not a compiled artifact directory" in capsys.readouterr().err

@@ -144,3 +144,71 @@ def test_validate_json_errors_carry_the_file(tmp_path, capsys):
     assert [d["ok"] for d in docs] == [False, True]
     assert docs[0]["file"] == str(bad) and docs[0]["node"] == "w"
     assert docs[0]["type"] == "IRError" and "doppler" in docs[0]["error"]
+
+
+def test_every_argument_of_every_command_has_help_text():
+    """``radarsnn COMMAND --help`` explains every positional and option (``run --mode`` did not)."""
+    import argparse
+
+    from compiler.cli import build_parser
+
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    bare = [f"{name} {a.option_strings[0] if a.option_strings else a.dest}"
+            for name, p in [("radarsnn", parser), *sub.choices.items()] for a in p._actions
+            if not a.help and not isinstance(a, argparse._HelpAction)]
+    assert not bare, f"arguments without help: {bare}"
+
+
+def test_bin_layout_takes_the_python_field_names_too(tmp_path):
+    """``--bin-layout`` accepts ``TiBinLayout``'s own names (``n_samples=``) as well."""
+    from radar.ti_capture import TiBinLayout
+
+    short = TiBinLayout.parse("samples=8,chirps=2,rx=4,tx=2,real,bits=12")
+    assert TiBinLayout.parse("n_samples=8,n_chirps=2,n_rx=4,n_tx=2,complex=false,"
+                             "adc_bits=12") == short
+    assert short == TiBinLayout(n_samples=8, n_chirps=2, n_rx=4, n_tx=2, complex=False,
+                                adc_bits=12)
+
+
+def test_read_ti_bin_is_4d_unless_squeezed(tmp_path):
+    from radar.ti_capture import TiBinLayout, read_ti_bin
+
+    layout = TiBinLayout(n_samples=4, n_chirps=2, n_rx=1)
+    np.arange(2 * layout.words_per_frame, dtype="<i2").tofile(tmp_path / "adc.bin")
+    assert read_ti_bin(tmp_path / "adc.bin", layout).shape == (2, 1, 2, 4)
+    assert read_ti_bin(tmp_path / "adc.bin", layout, squeeze=True).shape == (2, 1, 2, 4)
+    one = read_ti_bin(tmp_path / "adc.bin", layout, n_frames=1)
+    assert one.shape == (1, 1, 2, 4)
+    assert read_ti_bin(tmp_path / "adc.bin", layout, n_frames=1, squeeze=True).shape == (1, 2, 4)
+
+
+def test_version_imports_no_command_module():
+    """``radarsnn --version`` took 2.1 s importing every sub-command's stack (numpy, scipy …)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom compiler.cli import main\ntry:\n    main(['--version'])\n"
+            "except SystemExit as e:\n    assert e.code == 0\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'pydantic', 'yaml', 'matplotlib', "
+            "'compiler.cli.chain') if m in sys.modules))")
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=root, env={**__import__("os").environ, "PYTHONPATH": str(root)},
+                          check=True)
+    assert done.stdout.splitlines() == [done.stdout.splitlines()[0], "[]"]
+    assert done.stdout.startswith("radarsnn ")
+
+
+def test_each_command_is_added_by_the_module_main_imports_for_it():
+    import argparse
+
+    from compiler.cli import COMMAND_MODULES, COMMAND_OF, build_parser
+
+    def commands(parser):
+        (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return set(sub.choices)
+
+    assert commands(build_parser()) == set(COMMAND_OF)
+    for name, module in COMMAND_OF.items():
+        assert module in COMMAND_MODULES and name in commands(build_parser([module]))

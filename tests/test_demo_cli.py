@@ -34,6 +34,10 @@ def test_demo_prints_a_table_and_json(capsys):
                  "--no-figures"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["scenes"][0]["preset"] == "carrada" and doc["scenes"][0]["target"] is None
+    # the map's shape in the axis order of the chain's arrays ([doppler, range]), named
+    scene = doc["scenes"][0]
+    assert scene["map_axes"] == ["doppler", "range"] and scene["map_shape"] == [64, 256]
+    assert "RD map 64 x 256 (doppler x range)" in out
 
 
 def test_a_conventional_only_summary_does_not_report_a_spiking_chain(tmp_path):

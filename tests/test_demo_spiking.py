@@ -28,6 +28,9 @@ def test_carrada_spiking_demo_finds_the_targets_and_writes_figures(tmp_path):
     assert "![RD maps](rd_carrada.png)" in summary and "spiking: 4/4 targets" in summary
     text = report.to_text()
     assert "spiking (loihi2): found 4/4 targets" in text and "resources on loihi2" in text
+    # the real-time fit in seconds, in the printed summary and in summary.md
+    assert "s per frame (" in text and "against a frame period of 0.1 s: does NOT fit" in text
+    assert "- real time: latency " in summary
 
 
 def test_demo_json_has_the_spiking_figures(capsys, tmp_path):

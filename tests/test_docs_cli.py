@@ -79,7 +79,7 @@ def workspaces(tmp_path_factory: pytest.TempPathFactory):
 
 
 def _environment() -> dict[str, str]:
-    from radar.loaders import default_data_dir  # $RADARSNN_DATA or ../shared/data
+    from radar.loaders import default_data_dir  # $RADARSNN_DATA or the shipped radar/data
 
     env = dict(os.environ)
     env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
@@ -166,3 +166,31 @@ def test_no_test_markers_name_their_reason() -> None:
     assert len(marked) <= len(BLOCKS) // 2, [b.where for b in marked]
     assert {"cli.md", "getting-started.md", "howto-chain.md"} <= {
         b.page for b in BLOCKS if b.no_test is None}
+
+
+def test_pages_with_command_sessions_say_to_activate_the_venv() -> None:
+    """``radarsnn`` is on ``PATH`` only in the activated venv: each page says so before its
+    first session that calls it by that name (``.venv/bin/radarsnn`` needs no activation)."""
+    silent = []
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        bare = [b for b in sessions(page) if re.search(r"(?<![/\w])radarsnn\s", b.code)]
+        if not bare:
+            continue
+        before = "\n".join(text.splitlines()[: bare[0].line])
+        if "source .venv/bin/activate" not in before:
+            silent.append(bare[0].where)
+    assert not silent, f"say `source .venv/bin/activate` before these sessions: {silent}"
+
+
+#: What a user of a clone cannot reach: paths outside the repository, the developers' notes,
+#: their issue and session numbers, papers named by a file number instead of a citation.
+UNREACHABLE = re.compile(r"\.\./shared|/work/|/tmp/b2env|NOTES(?:\.md| §)|\b[Ii]ssues? \d|"
+                         r"\b[Ss]essions? \d|\b[Pp]apers? 00\d|\b00\d paper")
+
+
+def test_no_page_names_what_a_user_cannot_reach() -> None:
+    found = [f"{page.name}:{n}: {m.group(0)}" for page in PAGES
+             for n, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1)
+             for m in [UNREACHABLE.search(line)] if m]
+    assert not found, found

@@ -167,6 +167,8 @@ def test_values_decoded_upstream_are_clipped_the_callers_are_refused(tmp_path):
     pkg = emit_numpy(program, tmp_path, name="tone_pkg")
     out, counts = run_package(pkg, {"x": tone})
     np.testing.assert_array_equal(out["out"], ref.outputs["out"])
+    # a detection mask is bool in both, as the interpreter gives it (the package wrote float64)
+    assert out["out"].dtype == ref.outputs["out"].dtype == np.bool_
     assert out["out"][5] and counts == [s.spike_counts for s in ref.simulations]
     with pytest.raises(SimulationError, match="error: input 'x': "):
         run_package(pkg, {"x": 10 * tone})

@@ -109,6 +109,17 @@ def test_dangling_node() -> None:
     g.infer_types()  # types are still defined; only verify insists on outputs
 
 
+def test_a_node_without_input_is_named_not_the_node_it_should_read() -> None:
+    g = Graph.from_dict({"name": "bad", "nodes": [
+        {"id": "x", "op": "input", "shape": {"sample": 8}},
+        {"id": "f", "op": "dft", "axis": "sample"},
+        {"id": "o", "op": "output", "input": "f"}]})
+    with pytest.raises(IRError, match=r"^node 'f' \(dft\): takes 1 input, got 0; give "
+                                      r"'input: <node id>' \(nodes: \['x', 'f', 'o'\]\)$") as info:
+        g.verify()  # it blamed 'x' as dangling
+    assert info.value.node == "f"
+
+
 def test_empty_graph() -> None:
     with pytest.raises(IRError, match="graph 'chain' has no nodes"):
         Graph().verify()

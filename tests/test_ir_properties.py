@@ -325,6 +325,12 @@ def _corrupt(graph: Graph, kind: str, data: st.DataObject) -> tuple[dict, str]:
         else:
             node["input"] = data.draw(st.sampled_from(sorted(unrelated[target])))
         return d, target
+    if kind == "missing_input":  # a reader lacks input: it is named, not the node it read
+        target = data.draw(st.sampled_from(readers))
+        node = _node(d, target)
+        node.pop("input", None)
+        node.pop("inputs", None)
+        return d, target
     assert kind == "dangling"
     out = data.draw(st.sampled_from(graph.output_ids()))
     d["nodes"] = [n for n in d["nodes"] if n["id"] != out]
@@ -332,7 +338,7 @@ def _corrupt(graph: Graph, kind: str, data: st.DataObject) -> tuple[dict, str]:
 
 
 CORRUPTIONS = ["cycle", "bad_axis", "bad_param", "unknown_input", "duplicate_id",
-               "unknown_op", "arity", "dangling"]
+               "unknown_op", "arity", "missing_input", "dangling"]
 
 
 @pytest.mark.parametrize("kind", CORRUPTIONS)

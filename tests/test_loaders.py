@@ -60,7 +60,9 @@ def test_default_data_dir_follows_env(monkeypatch, tmp_path):
     monkeypatch.setenv("RADARSNN_DATA", str(tmp_path))
     assert default_data_dir() == tmp_path
     monkeypatch.delenv("RADARSNN_DATA")
-    assert default_data_dir() == Path(__file__).resolve().parents[1].parent / "shared" / "data"
+    assert default_data_dir() == Path(__file__).resolve().parents[1] / "radar" / "data"
+    assert (default_data_dir() / "ti_chirps" / "LICENSE").is_file()
+    assert (default_data_dir() / "openradar" / "LICENSE").is_file()
 
 
 def _ti_folder(root: Path, chirps: np.ndarray | None = None) -> Path:

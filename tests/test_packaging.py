@@ -1,5 +1,6 @@
 """The wheel holds the import packages (the four of the design and the public ``radarsnn``),
-marked as typed, and nothing the user's runs leave beside them."""
+marked as typed, the real captures of ``radar/data``, and nothing the user's runs leave
+beside them."""
 
 from __future__ import annotations
 
@@ -30,6 +31,20 @@ def test_the_public_package_is_typed_and_packed() -> None:
     config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
     assert "py.typed" in config["tool"]["setuptools"]["package-data"]["radarsnn"]
     assert (ROOT / "radarsnn" / "py.typed").is_file()
+
+
+def test_every_shipped_capture_is_package_data():
+    """A regular (non-editable) install copies ``radar/data``: pyproject's globs cover it all."""
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    globs = config["tool"]["setuptools"]["package-data"]["radar"]
+    package = ROOT / "radar"
+    shipped = {p.relative_to(package).as_posix() for p in (package / "data").rglob("*")
+               if p.is_file() and "__pycache__" not in p.parts}
+    covered = {p.relative_to(package).as_posix() for g in globs for p in package.glob(g)}
+    assert {"data/README.md", "data/ti_chirps/LICENSE", "data/openradar/LICENSE",
+            "data/ti_chirps/data_tum.npy", "data/openradar/simple_frame_1.npy"} <= shipped
+    assert shipped == covered
 
 
 def test_the_public_names_resolve() -> None:

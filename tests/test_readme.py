@@ -23,3 +23,12 @@ def test_readme_names_the_two_setup_commands():
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     assert "radarsnn demo" in text
     assert "pytest" in text
+
+
+def test_quick_start_needs_only_import_radarsnn():
+    """The public package is enough: ops, presets, scenes, chains, compile, run."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    imports = {line.strip() for block in blocks for line in block.splitlines()
+               if re.match(r"\s*(import|from)\s", line)}
+    assert imports == {"import radarsnn"}, imports

@@ -1,4 +1,4 @@
-"""Compiled chains on the real captures of ../shared/data agree with the conventional chains.
+"""Compiled chains on the real captures shipped in radar/data agree with the conventional chains.
 
 * TI chirps (``ti_chirps/data_tum.npy``, 4 real chirps × 1024 samples): the compiled 1-D range
   chain (examples/chains/ti_range.yaml: range S-FT → |X| → OS-CFAR, for loihi2) finds the

@@ -46,7 +46,7 @@ def test_carrada_os_cfar_stand_in_on_loihi():
     assert stage["synapse_memory_bits"] == 2_851_584 * 24
     io = {r["name"]: r for r in data["frame_io"]}
     assert round(io["raw_cube"]["memory_kB"]) == 262 and round(io["rd_map"]["memory_kB"], 1) == 32.8
-    assert round(io["ra_map"]["bandwidth_Mbit_s"], 1) == 10.5
+    assert "ra_map" not in io  # the chain has no angle stage
     assert [r["total"] for r in data["cfar_ops"]] == [177, 276]
     assert data["latency"]["total_s"] == pytest.approx(100 * 1e-5) and data["latency"]["fits"]
     assert data["totals"]["neurons"] == 16_384 and data["totals"]["cores"] == 67
@@ -61,6 +61,11 @@ def test_markdown_and_core_map(tmp_path):
     assert md.startswith("# Resource report: carrada-rd-oscfar on spinnaker2")
     assert "| node | motif | inputs | neurons | synapses |" in md and "| det | os_cfar |" in md
     assert "OS-CFAR (spiking) | 176 | 100 | 276" in md
+    totals = rep.data["totals"]  # stored and instance synapse counts, each named
+    assert (f"synapses stored {totals['synapses_stored']:,} (synapse instances "
+            f"{totals['synapses']:,})").replace(",", " ") in md
+    assert "| inputs | neurons | synapse_instances | synapses_stored |" in md
+    assert "ra_map" not in md
     png = rep.save_core_map(tmp_path / "cores.png")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -117,7 +122,7 @@ def test_network_runs_by_hand():
 
 
 def test_carrada_chain_reports_on_loihi_from_the_cli(capsys):
-    assert main(["report", str(CARRADA), "--target", "loihi", "--format", "json"]) == 0
+    assert main(["report", str(CARRADA), "--target", "loihi", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = {r["node"]: r for r in data["stages"]}
     # rng (256 repetitions) and dop (1 024) multiplexed; the OS-CFAR stays spatial (Table 3)
@@ -149,5 +154,8 @@ def test_carrada_compiles_for_loihi():
     assert round(io["raw_cube"]["memory_kB"]) == 262
     assert round(io["rd_map"]["memory_kB"], 1) == 32.8
     assert round(io["rd_map"]["bandwidth_Mbit_s"], 2) == 2.62
+    assert "ra_map" not in io  # no angle stage: no RA map row
+    asked = build_report(prog, n_angle_bins=256)  # CARRADA's RA map, computed elsewhere
+    io = {r["name"]: r for r in asked.data["frame_io"]}
     assert round(io["ra_map"]["memory_kB"]) == 131
     assert round(io["ra_map"]["bandwidth_Mbit_s"], 1) == 10.5

@@ -86,7 +86,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
                    help="an artifact directory or a chain YAML file (compiled first)")
     p.add_argument("--target", "-t", default="loihi2",
                    help="hardware profile a chain is compiled for (default loihi2)")
-    p.add_argument("--backend", "-b", default="numpy", choices=sorted(EMITTERS))
+    p.add_argument("--backend", "-b", default="numpy", choices=sorted(EMITTERS),
+                   help="what to generate (numpy: a standalone numpy simulator package)")
     p.add_argument("--output", "-o", required=True, metavar="OUT_DIR",
                    help="directory that receives the package folder")
     p.add_argument("--name", help="package name (default: snn_<chain>)")

@@ -200,6 +200,11 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
                 "outs, spikes = $m.simulate({p: values[p] for p in ports}, policies)\n"
                 "values.update(outs)\ncounts.append(spikes)", m=ident(module), ports=lit(ports),
                 decoded=lit(tuple(p for p in ports if p in decoded))))
+            masks = tuple(d.port for d in seg.network.decoders
+                          if d.port in types and types[d.port].domain == "mask")
+            if masks:  # a decoded mask is bool, as run_program and the interpreter give it
+                body.append(render("for node in $masks:\n    values[node] = values[node] != 0",
+                                   masks=lit(masks)))
             decoded.update(d.port for d in seg.network.decoders)
         else:
             op = program.graph.op(seg.node)

@@ -1,6 +1,6 @@
 r"""The shipped default classifier: its layer stack, dataset, training settings and weights file.
 
-The stack is paper 000's SNN (2 spiking convolutions, a recurrent LIF layer, a
+The stack is Vogginger et al.'s SNN (2 spiking convolutions, a recurrent LIF layer, a
 non-spiking integrator) sized for its operation budget, issue #8: synaptic events at most
 1 % of the conv+LSTM ANN's multiply-accumulates. Per sequence of ``T`` frames the events
 are :math:`E = \sum_{\text{layers}} \sum_t s_t \cdot \text{fan-out}`, so every layer's

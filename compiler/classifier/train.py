@@ -2,7 +2,7 @@ r"""Training the classifier and its baselines with PyTorch (optional extra ``tra
 
 Models (``(n, T, H, W)`` ROI sequences in, class scores out):
 
-* :func:`snn_model` — paper 000's SNN built from a :class:`~ir.ops.classify.Classifier`
+* :func:`snn_model` — Vogginger et al.'s SNN built from a :class:`~ir.ops.classify.Classifier`
   op: the same update as :mod:`ir.classifier_forward.forward` (so the trained weights mean
   the same in numpy and in the compiled network), spikes through a surrogate gradient
   :math:`\partial s/\partial v = 1/(1 + \beta|v - v_{th}|)^2` (fast sigmoid), trained by

@@ -42,8 +42,8 @@ from importlib import import_module
 from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
-__all__ = ["COMMAND_MODULES", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE", "LOGGED_PACKAGES",
-           "build_parser", "configure_logging", "main"]
+__all__ = ["COMMAND_MODULES", "COMMAND_OF", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE",
+           "LOGGED_PACKAGES", "build_parser", "configure_logging", "main"]
 
 #: Exit status of a command that did its work.
 EXIT_OK = 0
@@ -58,6 +58,16 @@ LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
                    "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
                    "compiler.cli.import_nir", "backends.crosscheck.command")
+#: Sub-command -> the module of :data:`COMMAND_MODULES` that adds it.  :func:`main` imports
+#: only the module of the command it runs (none for ``--version``), so a command does not
+#: pay for the others' imports (Dask, the emitter, …); a command missing here makes it
+#: import them all.
+COMMAND_OF = {"validate": "compiler.cli.chain", "schema": "compiler.cli.chain",
+              "compile": "compiler.cli.chain", "report": "compiler.cli.chain",
+              "run": "compiler.cli.run", "demo": "compiler.cli.demo", "bench": "compiler.cli.demo",
+              "emit": "backends.emit.command", "sweep": "compiler.sweep.command",
+              "export-nir": "compiler.cli.export_nir", "import-nir": "compiler.cli.import_nir",
+              "crosscheck": "backends.crosscheck.command"}
 
 
 def _version() -> str:
@@ -76,8 +86,14 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``radarsnn`` command."""
+def build_parser(modules: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser of the ``radarsnn`` command.
+
+    Parameters
+    ----------
+    modules : sequence of str, optional
+        The modules whose sub-commands to add (default: all of :data:`COMMAND_MODULES`).
+    """
     parser = _Parser(
         prog="radarsnn",
         description="Compile automotive-radar DSP chains into spiking neural networks.")
@@ -86,8 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="show the full traceback of an error")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log what the compiler and simulator do (-v: info, -vv: debug)")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in COMMAND_MODULES:
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                help="the sub-command (radarsnn COMMAND --help for its options)")
+    for name in COMMAND_MODULES if modules is None else modules:
         import_module(name).add_parsers(sub)
     for command in sub.choices.values():  # also after the command: radarsnn run ... --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
@@ -158,11 +175,27 @@ def _silence_stdout() -> None:
         pass
 
 
+def _modules_for(argv: Sequence[str]) -> tuple[str, ...] | None:
+    """The modules ``argv`` needs: its command's, none for a bare ``--version``, else all.
+
+    Examples
+    --------
+    >>> _modules_for(["-v", "run", "DIR"]), _modules_for(["--version"]), _modules_for([])
+    (('compiler.cli.run',), (), None)
+    """
+    for arg in argv:  # the options before the command take no value
+        if arg in COMMAND_OF:
+            return (COMMAND_OF[arg],)
+        if not arg.startswith("-"):
+            return None  # an unknown command: every module, for argparse's message
+    return () if "--version" in argv and not {"-h", "--help"} & set(argv) else None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 1 runtime error, 2 usage error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(_modules_for(argv)).parse_args(argv)
     except UsageError as err:
         return _error_exit(err, argparse.Namespace(json="--json" in argv))
     configure_logging(args.verbose)

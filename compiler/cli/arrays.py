@@ -119,8 +119,7 @@ def read_input(spec: str, port: str, *, bin_layout=None):
                                 "[,device=xwr14xx] (docs/cli.md, Inputs)")
         layout = (bin_layout if isinstance(bin_layout, TiBinLayout)
                   else TiBinLayout.parse(bin_layout))
-        adc = read_ti_bin(path, layout)
-        return adc[0] if len(adc) == 1 else adc
+        return read_ti_bin(path, layout, squeeze=True)
     except RadarSNNError as err:
         raise type(err)(f"input for port {port!r}: {err}", node=err.node) from None
 
@@ -191,4 +190,5 @@ def bin_layout_argument(p: argparse.ArgumentParser) -> None:
                         "samples=256,chirps=128,rx=4,tx=2 — keys: samples (per chirp), chirps "
                         "(per TX: the loops), rx, tx (default 1), complex or real (default "
                         "complex), device (xwr16xx, the default, or xwr14xx), bits (default "
-                        "16); see docs/cli.md")
+                        "16); each key may be spelled as radar.ti_capture.TiBinLayout's field: "
+                        "n_samples, n_chirps, n_rx, n_tx, adc_bits; see docs/cli.md")

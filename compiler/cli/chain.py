@@ -237,6 +237,7 @@ def _warn_accuracy(program, calibration: dict, note: str) -> None:
 
 def _cmd_compile(args: argparse.Namespace) -> int:
     from backends import save_program
+    from compiler.report.render import totals_line
 
     program, note = _compile(args, args.target)
     folder = save_program(program, args.output, extra={
@@ -249,6 +250,7 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         print(json.dumps({"artifact": str(folder), "chain": program.graph.name,
                           "target": program.target.name, "segments": segments,
                           "totals": totals,
+                          "latency": _latency_summary(report),
                           "accuracy": program.records.accuracy.to_dict()},
                          sort_keys=True, default=str))
         return 0
@@ -256,13 +258,23 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         print(f"compiled chain {program.graph.name!r} for {program.target.name} into {folder}/")
         print(f"  segments: {' → '.join(segments)}")
         if totals:
-            print("  " + ", ".join(f"{k} {v:,}" for k, v in totals.items()
-                                   if isinstance(v, int)))
+            print("  " + totals_line(totals))
+        if report is not None:
+            print("  " + report.latency_line())
         contract = program.records.accuracy
         if hasattr(contract, "lines"):  # measured: the accuracy contract per stage
             print("\n".join(f"  {line}" for line in contract.lines()))
         print(f"  {note}; full report: {folder / 'report.md'}")
     return 0
+
+
+def _latency_summary(report) -> dict:
+    """The real-time fit of ``compile --json``: seconds per frame, frame period, fits."""
+    if report is None:
+        return {}
+    lat = report.data["latency"]
+    return {k: lat.get(k) for k in ("total_steps", "total_s", "frame_period_s", "fits",
+                                    "max_step_s")}
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -287,11 +299,13 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise RadarSNNError(f"{args.chain}: the program was compiled without a target; no report")
     if args.core_map is not None:
         write_output(args.core_map, report.core_map_png(), "the core map")
+    if args.format is not None:
+        print(f"warning: --format {args.format} is deprecated and will be removed; "
+              + ("use --json" if args.format == "json" else "Markdown is the default")
+              + " (the same output)", file=sys.stderr)
     if args.format == "json" or args.json:
         print(report.to_json())
         if "synthetic noise" in note:  # stdout stays JSON; the caveat goes to stderr
-            import sys
-
             print(f"note: {note}", file=sys.stderr)
     else:
         print(report.to_markdown())
@@ -310,7 +324,9 @@ def _motif_help() -> str:
 
 
 def _compile_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("chain", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("chain", type=Path, metavar="CHAIN.yaml",
+                   help="the chain file to compile (report: or a `radarsnn compile` artifact "
+                        "directory)")
     p.add_argument("--target", "-t", default="loihi2",
                    help="built-in profile (loihi, loihi2, spinnaker2, unbounded) or a YAML file "
                         "(default loihi2)")
@@ -340,7 +356,8 @@ def add_parsers(sub) -> None:
     """Add ``validate``, ``schema``, ``compile`` and ``report`` to ``sub``."""
     p = sub.add_parser("validate", help="check chain files and print their inferred types; "
                                         "every file is checked, one error line per bad one")
-    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml")
+    p.add_argument("chains", nargs="+", type=Path, metavar="CHAIN.yaml",
+                   help="one or more chain files to verify")
     p.add_argument("--json", action="store_true",
                    help="one JSON line per chain (a bad one: ok false, file, error, type, node)")
     p.set_defaults(func=_cmd_validate)
@@ -359,7 +376,9 @@ def add_parsers(sub) -> None:
 
     p = sub.add_parser("report", help="what a chain (or a compiled artifact) costs on a target")
     _compile_arguments(p)
-    p.add_argument("--format", choices=["md", "json"], default="md")
-    p.add_argument("--json", action="store_true", help="same as --format json")
+    p.add_argument("--json", action="store_true",
+                   help="print the report as JSON (default: Markdown)")
+    p.add_argument("--format", choices=["md", "json"], default=None,
+                   help="deprecated: --format json is --json, --format md the default")
     p.add_argument("--core-map", metavar="PNG", help="also draw the core placement map")
     p.set_defaults(func=_cmd_report, target=None)  # None: loihi2, or an artifact's own

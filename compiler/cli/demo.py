@@ -65,7 +65,8 @@ def add_parsers(sub) -> None:
     p.set_defaults(func=_cmd_demo)
 
     p = sub.add_parser("bench", help="frames/s of the spiking chain vs numpy (and Brian2)")
-    p.add_argument("--preset", default="carrada", choices=["seed003", "carrada"])
+    p.add_argument("--preset", default="carrada", choices=["seed003", "carrada"],
+                   help="radar preset whose scene and chain are timed (default carrada)")
     p.add_argument("--repeats", type=int, default=5, help="timed runs per figure (median)")
     p.add_argument("--step-repeats", type=int, help="timed runs of step mode (default --repeats)")
     p.add_argument("--threads", type=int, default=1, help="BLAS threads (default 1: one core)")

@@ -2,8 +2,9 @@
 
 Inputs are read by :mod:`compiler.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
 ``.bin``); one with a leading frames axis runs frame after frame with a progress
-bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are clipped
-with one warning line by default (``--out-of-range``, docs/cli.md).
+bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are refused by
+default (one ``error:`` line naming the count and ``--clip``); ``--clip`` clips them
+silently, ``--out-of-range warn`` clips them with one warning line (docs/cli.md).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from backends import is_program, load
     from backends.atomic import check_output
 
+    _refuse_a_file(args.artifact)
     path = None
     if args.output is not None:  # before any work: a device (/dev/null), a folder, a NUL byte
         given = str(args.output)
@@ -59,6 +61,31 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _refuse_a_file(path: Path) -> None:
+    """``run`` takes a compiled artifact directory: say what to do with a chain or other file.
+
+    Examples
+    --------
+    >>> _refuse_a_file(Path("examples/chains/ti_range.yaml"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ir.errors.ArtifactError: examples/chains/ti_range.yaml is a chain file, ...: compile it ...
+    """
+    from ir.errors import ArtifactError
+
+    if not path.is_file():
+        return
+    if path.name in ("program.json", "manifest.json"):
+        raise ArtifactError(f"{path} is a file of an artifact: give its directory "
+                            f"(radarsnn run {path.parent} -i …)")
+    if path.suffix.lower() in (".yaml", ".yml", ".json"):
+        raise ArtifactError(f"{path} is a chain file, not a compiled artifact: compile it first "
+                            f"(radarsnn compile {path} -o DIR), then run the directory "
+                            "(radarsnn run DIR -i …)")
+    raise ArtifactError(f"{path} is a file, not a compiled artifact directory: give the "
+                        "directory `radarsnn compile CHAIN.yaml -o DIR` wrote")
+
+
 def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_range: str):
     """Run a program (frame by frame, with a progress bar when there are frames) or a network."""
     from backends.reference import run_program, simulate
@@ -80,7 +107,7 @@ def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_rang
 
 
 def clipped_warning(clipped: dict[str, int]) -> str:
-    """The ``warning:`` line of ``radarsnn run`` when it clipped inputs (``--out-of-range warn``).
+    """The ``warning:`` line of ``radarsnn run --out-of-range warn`` when it clipped inputs.
 
     Examples
     --------
@@ -100,17 +127,23 @@ def add_parsers(sub) -> None:
     """Add ``run`` to ``sub``."""
     p = sub.add_parser("run", help="simulate a compiled artifact on inputs (.npy, .npz, .mat, "
                                    "TI .bin)")
-    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR")
+    p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR",
+                   help="a compiled artifact directory (`radarsnn compile CHAIN.yaml -o DIR`); "
+                        "a chain file must be compiled first")
     p.add_argument("--input", "-i", action="append", required=True, metavar="[PORT=]FILE",
                    help=f"input array per port, each port once: {INPUT_FORMS} (repeat for "
                         "several ports)")
     bin_layout_argument(p)
-    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
-    p.add_argument("--out-of-range", choices=["warn", "clip", "reject"], default="warn",
+    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto",
+                   help="simulation engine: step (every time step), closed (the spike steps "
+                        "of a fire-once feed-forward network computed directly), auto (closed "
+                        "for a network that is eligible, else step; the default)")
+    p.add_argument("--out-of-range", choices=["reject", "warn", "clip"], default="reject",
                    help="input values above an encoder's calibrated range (a scene stronger "
-                        "than the calibration data): clip them and print one warning line with "
-                        "the count (warn, the default), clip silently (clip), or refuse them "
-                        "with an error (reject); the count is in the summary and --json")
+                        "than the calibration data): refuse them with an error naming the "
+                        "count (reject, the default), clip them and print one warning line "
+                        "with the count (warn), or clip silently (clip); a clipped count is in "
+                        "the summary and --json")
     p.add_argument("--clip", action="store_true", help="the same as --out-of-range clip")
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")

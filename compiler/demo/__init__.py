@@ -23,9 +23,11 @@ from pathlib import Path
 
 from backends.atomic import check_output
 from compiler.cli.chain import write_output
-from compiler.demo.figures import rd_maps, spike_times
+from compiler.demo.figures import rd_maps, shown_range_bins
 from compiler.demo.matching import detection_peaks, score_peaks
+from compiler.demo.rasters import spike_times
 from compiler.demo.scenes import SceneReport, TargetRow, run_scene
+from compiler.report.render import latency_line, totals_line
 from radar.config import preset
 
 __all__ = ["DemoReport", "SceneReport", "TargetRow", "detection_peaks", "run_demo", "score_peaks"]
@@ -35,6 +37,12 @@ PRESETS = ("seed003", "carrada")
 
 def _fmt(x, spec: str = ".3f") -> str:
     return "-" if x is None else format(x, spec)
+
+
+def _latency(resources: dict) -> str:
+    """The report's latency line from a scene's ``latency_*`` resources."""
+    lat = {k[len("latency_"):]: v for k, v in resources.items() if k.startswith("latency_")}
+    return latency_line({**lat, "networks": [{"step_s": lat.get("step_s")}]})
 
 
 @dataclass
@@ -49,8 +57,9 @@ class DemoReport:
         """A readable table per scene."""
         lines = []
         for s in self.scenes:
-            lines.append(f"== {s.preset}: chain {s.chain!r}, RD map {s.map_shape[0]} x "
-                         f"{s.map_shape[1]} (range x Doppler), seed {self.seed}, "
+            lines.append(f"== {s.preset}: chain {s.chain!r}, RD map "
+                         f"{' x '.join(map(str, s.map_shape))} ({' x '.join(s.map_axes)}), "
+                         f"seed {self.seed}, "
                          f"{s.seconds:.2f} s")
             lines.append(f"  {'range_m':>8} {'v_mps':>7} {'rcs':>5}  {'truth bin':>11}  "
                          f"{'conventional':>12}  {'spiking':>10}  status")
@@ -81,9 +90,9 @@ class DemoReport:
                     f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}")
                 r = s.resources
                 if r:
-                    lines.append(f"  resources on {s.target}: {r.get('neurons', 0):,} neurons, "
-                                 f"{r.get('synapses', 0):,} synapses, {r.get('cores', 0)} cores, "
-                                 f"{r.get('latency_total_steps', 0):,} steps per frame")
+                    lines.append(f"  resources on {s.target}: {totals_line(r)}")
+                    if "latency_frame_period_s" in r:
+                        lines.append("  " + _latency(r))
                 lines.append("  time: " + ", ".join(f"{k} {v:.2f} s"
                                                     for k, v in s.timings_s.items()))
         if self.files:
@@ -114,7 +123,9 @@ class DemoReport:
                           f"{s.spiking_n_false} false alarm peaks; cell sensitivity "
                           f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
                           f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
-                          "- resources: " + ", ".join(f"{k} {v}" for k, v in s.resources.items())]
+                          f"- resources: {totals_line(s.resources)}"]
+                if "latency_frame_period_s" in s.resources:
+                    lines += [f"- real time: {_latency(s.resources)}"]
             lines += ["", f"![RD maps](rd_{s.preset}.png)", ""]
             if s.target is not None:
                 lines += [f"![spike times](spikes_{s.preset}.png)", "",
@@ -157,7 +168,12 @@ def run_demo(seed: int = 0, presets: list[str] | None = None, *, target: str | N
             continue
         files = [rd_maps(out / f"rd_{name}.png", name, arrays, preset(name))]
         if arrays.first_spikes:
-            files.append(spike_times(out / f"spikes_{name}.png", name, arrays.first_spikes))
+            focus = {"rx": 0, **(dict(zip(("range", "doppler"), arrays.truth_bins[0],
+                                          strict=True)) if arrays.truth_bins else {})}
+            files.append(spike_times(
+                out / f"spikes_{name}.png", name, arrays.first_spikes, arrays.spike_shapes,
+                step_s=arrays.step_s, focus=focus,
+                max_bins=shown_range_bins(arrays.truth_bins, arrays.conventional_db.shape[0])))
         if arrays.report is not None:
             cores = out / f"cores_{name}.png"
             write_output(cores, arrays.report.core_map_png(), "the core map")

@@ -1,17 +1,19 @@
-"""The demo's figures (matplotlib, Agg): RD maps with detections, spike times.
+"""The demo's figures (matplotlib, Agg): RD maps with detections (spike rasters:
+:mod:`compiler.demo.rasters`; core maps: :mod:`compiler.report.core_map`).
 
 ``rd_maps`` draws the conventional and the spiking range-Doppler map side by
 side in physical units (range in m, radial velocity in m/s, from the radar
 configuration) on one colour scale: power in dB relative to the noise floor
 (the median of the conventional map), from ``-5`` to ``+25`` dB, so that every
-cell 25 dB or more above the noise is drawn in the top colour.  Maps larger
+cell 25 dB or more above the noise is drawn in the top colour.  The range axis
+stops a little past the farthest target (:func:`shown_range_bins`).  Maps larger
 than the panel are reduced by the *maximum* over the bins of each pixel, so a
-single-cell target never vanishes.  Targets hit, targets missed, false alarms
-and static clutter are marked with one hollow marker each (one legend entry per
-kind).  ``spike_times`` draws the first spike step of each neuron of the
-chain's populations in pipeline order (for the fire-once neurons of the
-time-coded motifs this *is* the raster: each spikes at most once).  The core
-map is :meth:`compiler.report.Report.save_core_map`.
+single-cell target never vanishes.  Each panel overlays its chain's detected
+cells (:data:`CELL_MARKERS`: the cells both chains detect, and in the chain's
+colour — :data:`CHAIN_COLOURS` — the cells only it detects), and marks targets
+hit, targets missed, false alarms and static clutter with one hollow marker each
+(:data:`MARKERS`, one legend entry per kind) and every aliased target
+(:data:`MARKERS_ALIASED`, annotated with its true velocity).
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ import numpy as np
 from compiler.cli.chain import write_output
 from compiler.demo.matching import detection_peaks, match_peak
 
-__all__ = ["MARKERS", "rd_figure", "rd_maps", "spike_figure", "spike_times"]
+__all__ = ["CELL_MARKERS", "CHAIN_COLOURS", "MARKERS", "MARKERS_ALIASED", "detection_cells",
+           "rd_figure", "rd_maps", "shown_range_bins"]
 
 #: Resolution of the figures (the figure's and the PNG's: the pooling needs them equal).
 DPI = 110
@@ -37,6 +40,16 @@ MARKERS = {
     "false_alarm": ("false alarm", "^", "magenta", 10),
     "clutter": ("static clutter at 0 m/s", "D", "cyan", 4.5),
 }
+#: The aliased-target marker (drawn over the hit / miss marker): label, marker, colour, size.
+MARKERS_ALIASED = ("target aliased in Doppler", "*", "orange", 15)
+#: Detected-cell kind -> (legend label, marker, colour, size); ``only`` takes the chain's colour.
+CELL_MARKERS = {
+    "cell": ("detected cell", ".", "white", 3.0),
+    "both": ("cell detected by both chains", ".", "white", 3.0),
+    "only": ("cell detected by the {chain} chain only", "x", None, 5.0),
+}
+#: The colour of the cells only one chain detects.
+CHAIN_COLOURS = {"conventional": "orange", "spiking": "red"}
 
 
 def _pyplot():
@@ -89,15 +102,61 @@ def _pool_to_pixels(fig, ax, image, db: np.ndarray, extent: list[float]) -> tupl
     return f_r, f_d
 
 
+def shown_range_bins(truth_bins, n_range: int, *, margin: float = 1.25,
+                     min_bins: int = 16) -> int:
+    """How many range bins (from bin 0) the RD figure shows: to a little past the farthest target.
+
+    ``margin`` × the farthest target's bin, plus 4 bins, at least ``min_bins``, at most the
+    map; the whole map when there is no target.
+
+    Examples
+    --------
+    >>> shown_range_bins([(9, 64), (17, 71), (184, 114)], 512)
+    234
+    >>> [shown_range_bins(t, 512) for t in ([(3, 0)], [], [(500, 0)])]
+    [16, 512, 512]
+    """
+    if not truth_bins:
+        return n_range
+    far = max(r for r, _ in truth_bins)
+    return int(min(n_range, max(min_bins, np.ceil(far * margin) + 4)))
+
+
+def detection_cells(mask: np.ndarray, other: np.ndarray | None) -> dict[str, np.ndarray]:
+    """Detected cells ``(range, doppler)`` of ``mask`` by :data:`CELL_MARKERS` kind.
+
+    With the other chain's mask, split into cells both chains detect and cells only this
+    one does; without it, every cell is ``"cell"``.
+
+    Examples
+    --------
+    >>> a = np.zeros((2, 3), bool); a[0, 1] = a[1, 2] = True
+    >>> b = np.zeros((2, 3), bool); b[0, 1] = True
+    >>> {k: v.tolist() for k, v in detection_cells(a, b).items()}
+    {'both': [[0, 1]], 'only': [[1, 2]]}
+    """
+    if other is None:
+        return {"cell": np.argwhere(mask)}
+    return {"both": np.argwhere(mask & other), "only": np.argwhere(mask & ~other)}
+
+
 def rd_figure(title: str, arrays, config, *, span_db: tuple[float, float] = SPAN_DB):
     """The RD-map figure (conventional, and spiking when present) as a matplotlib Figure.
+
+    The range axis is cropped to :func:`shown_range_bins` (a little past the farthest
+    target; the title counts detections beyond it); each panel marks its chain's detected
+    cells (:data:`CELL_MARKERS`: with both chains, the cells both detect and the cells only
+    this chain detects, in the chain's colour) and the targets (:data:`MARKERS`; a target
+    whose velocity is beyond the unambiguous span is also marked *aliased*, with its true
+    velocity).
 
     Parameters
     ----------
     title : str
         Scene name, the start of the figure's title.
     arrays : compiler.demo.scenes.SceneArrays
-        Maps in dB (``[range, doppler]``, Doppler fftshifted), detection masks, truth bins.
+        Maps in dB (``[range, doppler]``, Doppler fftshifted), detection masks, truth bins
+        (and their true velocities and aliasing, when known).
     config : radar.config.RadarConfig
         The scene's radar: gives the range (m) and velocity (m/s) of every bin.
     span_db : (float, float)
@@ -106,42 +165,59 @@ def rd_figure(title: str, arrays, config, *, span_db: tuple[float, float] = SPAN
     Returns
     -------
     matplotlib.figure.Figure
-        One image per panel (``ax.images[0]``, its data the plotted dB re noise floor).
+        One image per panel (``ax.images[0]``, its data the plotted dB re noise floor of
+        the shown range bins); marker lines labelled by kind and count.
     """
     plt = _pyplot()
-    panels = [("conventional", arrays.conventional_db, arrays.conventional_mask)]
+    panels = [("conventional", arrays.conventional_db, arrays.conventional_mask,
+               arrays.spiking_mask)]
     if arrays.spiking_db is not None:
-        panels.append(("spiking", arrays.spiking_db, arrays.spiking_mask))
+        panels.append(("spiking", arrays.spiking_db, arrays.spiking_mask,
+                       arrays.conventional_mask))
     floor_db = float(np.median(arrays.conventional_db))
     range_m, velocity_mps = config.range_axis_m(), config.velocity_axis_mps()
     n_range, n_doppler = arrays.conventional_db.shape
     if (n_range, n_doppler) != (range_m.size, velocity_mps.size):
         raise ValueError(f"RD map {n_range} x {n_doppler} does not match the radar's "
                          f"{range_m.size} range bins x {velocity_mps.size} Doppler bins")
+    n_show = shown_range_bins(arrays.truth_bins, n_range)
     dr_m, dv_mps = config.range_resolution_m, config.velocity_resolution_mps
     extent = [velocity_mps[0] - dv_mps / 2, velocity_mps[-1] + dv_mps / 2,
-              range_m[0] - dr_m / 2, range_m[-1] + dr_m / 2]
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels) + 1.2, 6.8), dpi=DPI,
+              range_m[0] - dr_m / 2, range_m[n_show - 1] + dr_m / 2]
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels) + 1.2, 7.2), dpi=DPI,
                              squeeze=False, constrained_layout=True)
     image = None
     drawn = []
-    for ax, (label, db, mask) in zip(axes[0], panels, strict=True):
-        rel = db - floor_db
+    aliased = [k for k, a in enumerate(getattr(arrays, "truth_aliased", []) or []) if a]
+    for ax, (label, db, mask, other) in zip(axes[0], panels, strict=True):
+        rel = (db - floor_db)[:n_show]
         image = ax.imshow(rel, origin="lower", aspect="auto", cmap="viridis", extent=extent,
                           vmin=span_db[0], vmax=span_db[1], interpolation="nearest")
+        for kind, cells in detection_cells(mask[:n_show], None if other is None
+                                           else other[:n_show]).items():
+            name, marker, colour, size = CELL_MARKERS[kind]
+            colour = CHAIN_COLOURS[label] if kind == "only" else colour
+            ax.plot(velocity_mps[cells[:, 1]], range_m[cells[:, 0]], marker, linestyle="none",
+                    color=colour, markersize=size, markeredgewidth=0.8,
+                    label=f"{name.format(chain=label)} ({len(cells)})", gid=f"cells:{kind}")
         kinds = _classify(mask, db, arrays.truth_bins)
         for kind, (name, marker, colour, size) in MARKERS.items():
             rd = np.array(kinds[kind], dtype=np.int64).reshape(-1, 2)
             ax.plot(velocity_mps[rd[:, 1]], range_m[rd[:, 0]], marker, linestyle="none",
                     markerfacecolor="none", markeredgecolor=colour, markeredgewidth=1.2,
                     markersize=size, label=f"{name} ({len(rd)})")
+        _mark_aliased(ax, arrays, aliased, range_m, velocity_mps, config)
+        beyond = int(mask[n_show:].sum())
         n_t = len(arrays.truth_bins)
         ax.set_title(f"{label}: {len(kinds['hit'])}/{n_t} targets, "
-                     f"{len(kinds['false_alarm'])} false alarms, {int(mask.sum())} cells",
+                     f"{len(kinds['false_alarm'])} false alarms, {int(mask.sum())} cells"
+                     + (f" ({beyond} beyond {range_m[n_show - 1]:.3g} m)" if beyond else ""),
                      fontsize=10)
+        ax.set_xlim(extent[0], extent[1])
+        ax.set_ylim(extent[2], extent[3])  # markers beyond the shown range are clipped
         ax.set_xlabel("radial velocity (m/s)")
         ax.set_ylabel("range (m)")
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2, fontsize=8,
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=7.5,
                   facecolor="0.85", framealpha=1.0)
         drawn.append((ax, ax.images[0], rel))
     fig.colorbar(image, ax=list(axes[0]), extend="both",
@@ -150,97 +226,31 @@ def rd_figure(title: str, arrays, config, *, span_db: tuple[float, float] = SPAN
     pooled = max(factors)
     note = (f"; each pixel the max of {pooled[0]} × {pooled[1]} bins" if pooled != (1, 1)
             else "")
-    fig.suptitle(f"{title}: range-Doppler map, {n_range} × {n_doppler} bins of "
+    shown = (f"range bins 0–{n_show - 1} of {n_range}" if n_show < n_range
+             else f"{n_range} range bins")
+    fig.suptitle(f"{title}: range-Doppler map, {shown} × {n_doppler} Doppler bins of "
                  f"{dr_m:.3g} m × {dv_mps:.3g} m/s (unambiguous ± "
                  f"{config.max_velocity_mps:.3g} m/s){note}", fontsize=11)
     return fig
 
 
+def _mark_aliased(ax, arrays, aliased: list[int], range_m, velocity_mps, config) -> None:
+    """Mark each aliased target (a velocity beyond ± v_max shows at its wrapped bin)."""
+    name, marker, colour, size = MARKERS_ALIASED
+    true_v = getattr(arrays, "truth_velocity_mps", []) or []
+    rd = np.array([arrays.truth_bins[k] for k in aliased], dtype=np.int64).reshape(-1, 2)
+    ax.plot(velocity_mps[rd[:, 1]], range_m[rd[:, 0]], marker, linestyle="none",
+            markerfacecolor="none", markeredgecolor=colour, markeredgewidth=1.4,
+            markersize=size, label=f"{name} ({len(rd)})", gid="aliased")
+    for k, (r, d) in zip(aliased, rd.tolist(), strict=True):
+        text = "aliased" + (f": true {true_v[k]:+.3g} m/s" if k < len(true_v) else "")
+        ax.annotate(text, (velocity_mps[d], range_m[r]), xytext=(8, 8),
+                    textcoords="offset points", color=colour, fontsize=8, fontweight="bold")
+
+
 def rd_maps(path: Path, title: str, arrays, config) -> Path:
     """Write :func:`rd_figure` as a PNG at ``path``; return ``path``."""
     return write_png(path, rd_figure(title, arrays, config))
-
-
-def _block(steps: np.ndarray, max_neurons: int) -> tuple[int, np.ndarray]:
-    """The block of ``max_neurons`` consecutive neurons with the most spikes: (start, steps)."""
-    n_blocks = max(1, -(-steps.size // max_neurons))
-    padded = np.full(n_blocks * max_neurons, -1, dtype=np.int64)
-    padded[:steps.size] = steps
-    block = int(np.argmax((padded.reshape(n_blocks, max_neurons) >= 0).sum(axis=1)))
-    start = block * max_neurons
-    return start, padded[start:min(start + max_neurons, steps.size)]
-
-
-def spike_figure(title: str, first_spikes: dict[str, np.ndarray], max_neurons: int = 512,
-                 max_panels: int = 8):
-    """First spike steps of the chain's populations (frame 0), one panel each, in pipeline order.
-
-    Parameters
-    ----------
-    title : str
-        Scene name, the start of the figure's title.
-    first_spikes : dict of str to ndarray
-        Population id (``node/role``) -> first spike step per neuron (flat, -1: none),
-        in pipeline order (the order of the stages through the chain).
-    max_neurons : int
-        A population with at most ``max_neurons`` spikes is drawn whole; of a busier
-        one the block of ``max_neurons`` consecutive neurons (flat index) with the
-        most spikes.
-    max_panels : int
-        At most this many populations (the first ones) are drawn.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One axes per population, titled ``<population id>: ...``, neuron and step
-        ticks at integers.
-    """
-    from matplotlib.ticker import MaxNLocator
-
-    plt = _pyplot()
-    items = list(first_spikes.items())[:max_panels]
-    n = max(1, len(items))
-    last_step = {}  # one time axis per stage (its populations share a window)
-    for pid, steps in items:
-        node = pid.split("/")[0]
-        last_step[node] = max(last_step.get(node, 0), int(steps.max(initial=0)))
-    fig, axes = plt.subplots(n, 1, figsize=(8, 1.7 * n + 0.7), squeeze=False)
-    for ax, (pid, steps) in zip(axes[:, 0], items, strict=False):
-        total = int((steps >= 0).sum())
-        if total <= max_neurons:  # sparse: every spike, over the whole population
-            start, s = 0, steps
-        else:
-            start, s = _block(steps, max_neurons)
-        fired = np.flatnonzero(s >= 0)
-        ax.plot(s[fired], fired + start, "|", markersize=4 if total <= max_neurons else 3,
-                color="black")
-        right = last_step[pid.split("/")[0]] or max(last_step.values(), default=1)
-        ax.set_xlim(-0.5, right + 1.5)
-        ax.set_ylim(start - 0.5, start + max(s.size, 1) - 0.5)
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))
-        ax.set_ylabel("neuron")
-        ax.set_xlabel("time step", fontsize=8)
-        if total == 0:
-            ax.text(0.5, 0.5, "no spike time recorded in frame 0 (silent, or a graded "
-                    "read-out: membranes sent as payloads)", transform=ax.transAxes,
-                    ha="center", va="center", color="0.4", fontsize=8)
-            ax.set_title(f"{pid}: {steps.size} neurons, no spike", fontsize=9)
-        elif total <= max_neurons:
-            ax.set_title(f"{pid}: all {steps.size} neurons, {total} spiked", fontsize=9)
-        else:
-            ax.set_title(f"{pid}: neurons {start}–{start + s.size - 1}, {fired.size} spiked "
-                         f"({total} of {steps.size} in all)", fontsize=9)
-    fig.suptitle(f"{title}: first spike per neuron (frame 0), stages in pipeline order",
-                 fontsize=10)
-    fig.tight_layout()
-    return fig
-
-
-def spike_times(path: Path, title: str, first_spikes: dict[str, np.ndarray],
-                max_neurons: int = 512) -> Path:
-    """Write :func:`spike_figure` as a PNG at ``path``; return ``path``."""
-    return write_png(path, spike_figure(title, first_spikes, max_neurons))
 
 
 def write_png(path: Path, fig) -> Path:

@@ -12,7 +12,7 @@ detections against the conventional ones cell by cell:
 
 with :math:`S` the spiking and :math:`C` the conventional detected cells.  The
 S-FT RMSE is :func:`~compiler.lowering.dft_common.modulus_rmse` of the 2-D
-spectrum (moduli min–max normalised over the whole map, NOTES §1.1).
+spectrum (moduli min–max normalised over the whole map).
 """
 
 from __future__ import annotations
@@ -72,6 +72,7 @@ class SceneReport:
     preset: str
     chain: str
     map_shape: tuple[int, int]
+    """The RD map's shape in the chain's axis order (``map_axes``), as its arrays hold it."""
     targets: list[TargetRow]
     n_peaks: int
     n_clutter: int
@@ -88,6 +89,7 @@ class SceneReport:
     sft_rmse: float | None = None
     resources: dict[str, Any] = field(default_factory=dict)
     timings_s: dict[str, float] = field(default_factory=dict)
+    map_axes: tuple[str, ...] = ("doppler", "range")
 
     @property
     def n_targets(self) -> int:
@@ -116,6 +118,10 @@ class SceneArrays:
     truth_bins: list[tuple[int, int]]
     first_spikes: dict[str, np.ndarray] = field(default_factory=dict)
     report: Any = None
+    truth_velocity_mps: list[float] = field(default_factory=list)
+    truth_aliased: list[bool] = field(default_factory=list)
+    spike_shapes: dict[str, dict[str, int]] = field(default_factory=dict)
+    step_s: float | None = None
 
 
 def _range_doppler(values: dict, graph, node: str) -> np.ndarray:
@@ -133,9 +139,12 @@ def _resources(report) -> dict[str, Any]:
     d = report.data
     out = {k: v for k, v in d["totals"].items() if isinstance(v, int | float)}
     latency = d.get("latency") or {}
-    for key in ("total_steps", "total_s", "fits"):
+    for key in ("total_steps", "total_s", "frame_period_s", "fits", "max_step_s"):
         if key in latency:
             out[f"latency_{key}"] = latency[key]
+    steps = [r["step_s"] for r in latency.get("networks", ()) if r.get("step_s")]
+    if steps:
+        out["latency_step_s"] = steps[0]
     return out
 
 
@@ -195,12 +204,16 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
     c_mask, c_power = _range_doppler(conv, graph, "det"), _range_doppler(conv, graph, "rd")
     truth = [(int(t.range_bin), int(t.doppler_bin)) for t in frame.truth]
     c_score = score_peaks(c_mask, c_power, truth)
-    report = SceneReport(preset=name, chain=graph.name, map_shape=tuple(c_mask.shape),
+    det_axes = graph.infer_types()["det"].axes  # the chain's own order: [doppler, range]
+    report = SceneReport(preset=name, chain=graph.name, map_shape=tuple(det_axes.values()),
+                         map_axes=tuple(det_axes),
                          targets=[], n_peaks=c_score.n_peaks, n_clutter=c_score.n_clutter,
                          n_false=c_score.n_false, seconds=0.0, target=target,
                          cells_conventional=int(c_mask.sum()))
     arrays = SceneArrays(conventional_db=_db(c_power), spiking_db=None, conventional_mask=c_mask,
-                         spiking_mask=None, truth_bins=truth)
+                         spiking_mask=None, truth_bins=truth,
+                         truth_velocity_mps=[float(t.velocity_mps) for t in frame.truth],
+                         truth_aliased=[bool(t.aliased) for t in frame.truth])
     s_found = [None] * len(truth)
     if spiking:
         t0 = time.perf_counter()
@@ -211,7 +224,7 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
         say(name, f"compiled for {target}")
         t0 = time.perf_counter()
         # the scene frame may exceed the calibration frame's range by a few ADC codes: clip
-        # (explicitly; the default policy warns) rather than print a warning in the demo
+        # (explicitly; the default policy refuses them)
         result = run_program(program, {"adc": frame.adc}, mode="auto", out_of_range="clip")
         timings["simulate"] = time.perf_counter() - t0
         say(name, "spiking chain simulated")
@@ -247,6 +260,8 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
                        if p.id in steps_of),
                       key=lambda p: topo.get(p.origin.get("node"), len(topo)))
         arrays.first_spikes = {p.id: steps_of[p.id][0].reshape(-1) for p in pops}
+        arrays.spike_shapes = {p.id: dict(p.shape) for p in pops}
+        arrays.step_s = getattr(program.target, "time_step_s", None)
     report.targets = [
         TargetRow(range_m=float(t.range_m), velocity_mps=float(t.velocity_mps),
                   rcs_dbsm=float(t.rcs_dbsm), range_bin=int(t.range_bin),

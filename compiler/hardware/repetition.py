@@ -5,7 +5,7 @@ node (a population without an origin is a stage of its own id).  Its
 **repetitions** :math:`R` is the gcd of the repetition counts of the projections
 into it: a matrix shared over pass-through axes is applied
 :math:`\text{source.size} / n_{in}` times, a stencil counts 1 (the rule of the
-paper 000's Table 3, used by the report).
+Vogginger et al.'s Table 3, used by the report).
 
 The **repetition axes** of a stage are the pass-through axes (neither contracted
 nor produced) that every projection into it shares; every projection into a

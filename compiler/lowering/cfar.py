@@ -224,7 +224,7 @@ def cfar_counters(network: SpikingNetwork, node: str) -> dict[str, int]:
 
 
 def cfar_op_counts(kind: str, n_train: int, n_steps: int) -> dict[str, dict[str, int]]:
-    """Operations per CUT of conventional and spiking CFAR (paper 000, Table 1).
+    """Operations per CUT of conventional and spiking CFAR (Vogginger et al. 2022, Table 1).
 
     Parameters
     ----------

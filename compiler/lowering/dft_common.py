@@ -194,7 +194,7 @@ def real_weights(w: np.ndarray, in_split: PartLayout, out_split: PartLayout) -> 
 
     Notes
     -----
-    With ``out_split="re_im"`` and ``in_split="re_im"`` this is NOTES §1.1:
+    With ``out_split="re_im"`` and ``in_split="re_im"`` this is the complex product:
     ``Re y = A Re x − B Im x``, ``Im y = B Re x + A Im x`` for ``W = A + iB``.
     """
     w = np.asarray(w, dtype=np.complex128)
@@ -215,7 +215,7 @@ def _crop(y: np.ndarray, n_fft: int | None) -> np.ndarray:
 
 
 def sft_rmse(y: np.ndarray, ref: np.ndarray, *, n_fft: int | None = None) -> float:
-    r"""The S-FT accuracy protocol of NOTES §1.2, averaged over the leading axes.
+    r"""The S-FT accuracy protocol (López-Randulfe et al. 2022), averaged over the leading axes.
 
     For each row (last axis = DFT bins from bin 0): keep bins ``1 … n_fft/2 − 1``,
     stack Re and Im, min–max normalise each of ``y`` and ``ref`` jointly over
@@ -263,7 +263,7 @@ def sft_rmse(y: np.ndarray, ref: np.ndarray, *, n_fft: int | None = None) -> flo
 
 
 def modulus_rmse(y: np.ndarray, ref: np.ndarray, *, drop_bin0: bool = True) -> float:
-    r"""RMSE of moduli, each min–max normalised to [0, 1] over all entries (NOTES §1.1).
+    r"""RMSE of moduli, each min–max normalised to [0, 1] over all entries.
 
     Parameters
     ----------

@@ -86,7 +86,7 @@ STAGE_HEADROOM = 1.0
 
 @dataclass(frozen=True)
 class SfftResources:
-    """The S-FFT's analytic cost (NOTES §1.2, paper 000 Table 3): ``L = log4 N`` layers.
+    """The S-FFT's analytic cost (Vogginger et al. 2022, Table 3): ``L = log4 N`` layers.
 
     Attributes
     ----------
@@ -134,7 +134,7 @@ def sfft_resources(n: int, t_steps: int) -> SfftResources:
 
     Notes
     -----
-    Paper 000's Table 3 row (512 inputs, 4 608 neurons, 37 888 synapses, 550 steps)
+    Vogginger et al.'s Table 3 row (512 inputs, 4 608 neurons, 37 888 synapses, 550 steps)
     is this formula at ``N = 512, T = 100``, ``L = 4.5``.  The compiled network has
     ``ceil`` layers (a radix-2 layer counts as a whole layer of ``2N`` neurons), stores
     only non-zero synapses (at most ``16N`` per layer) and adds the clock neurons and
@@ -171,7 +171,7 @@ def radix_plan(n: int) -> tuple[int, ...]:
 
 
 def fft_stages(n: int, radices: tuple[int, ...] | None = None
-               ) -> tuple[list[sp.csr_matrix], np.ndarray]:
+              ) -> tuple[list[sp.csr_matrix], np.ndarray]:
     """The DIF stage matrices ``A_ℓ`` (``n × n``, complex CSR) and the output bins.
 
     Returns ``(stages, bins)`` with ``(A_{L-1} ⋯ A_0 x)[p] = DFT(x)[bins[p]]``, for
@@ -210,7 +210,7 @@ def fft_stages(n: int, radices: tuple[int, ...] | None = None
 
 
 def op_stages(op: DFT, n_in: int, radices: tuple[int, ...] | None = None
-              ) -> list[sp.csr_matrix]:
+             ) -> list[sp.csr_matrix]:
     """The stages of one ``dft`` node: window and zero padding in ``A_0``, bins in ``A_{L-1}``.
 
     The product equals :func:`compiler.lowering.dft_common.op_weights` (``n_out × n_in``).

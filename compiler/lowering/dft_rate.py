@@ -1,4 +1,5 @@
-r"""The ``rate`` motif of ``dft`` / ``linear``: a two-ReLU rate-coded spiking DFT (paper 003, §2.1).
+r"""The ``rate`` motif of ``dft`` / ``linear``: a two-ReLU rate-coded spiking DFT
+(López-Randulfe et al. 2021, §2.1).
 
 One complex output bin is four non-leaky IF neurons on the trailing ``part``
 axis, carrying :math:`\mathrm{relu}(\pm\mathrm{Re}\,y)` and

@@ -34,14 +34,15 @@ class ReportPass(Pass):
         Frames per second (compile option ``frame_rate_hz``; None: the chain's or 10).
     real_bits : int
         Bits per real sample of frame I/O (option ``real_bits``).
-    n_angle_bins : int
-        Angle bins of the RA map (option ``n_angle_bins``).
+    n_angle_bins : int, optional
+        Angle bins of an RA map the chain does not compute (option ``n_angle_bins``);
+        None: an RA map row only for a chain that computes one.
     """
 
     name: ClassVar[str] = "report"
     frame_rate_hz: float | None = None
     real_bits: int = 16
-    n_angle_bins: int = 256
+    n_angle_bins: int | None = None
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         if program.target is None and ctx.target is not None:

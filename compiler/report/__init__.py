@@ -51,7 +51,7 @@ def _step_note(profile) -> str:
 
 def build_report(program, *, sim_results: Sequence | None = None,
                  frame_rate_hz: float | None = None, real_bits: int = 16,
-                 n_angle_bins: int | None = 256) -> Report:
+                 n_angle_bins: int | None = None) -> Report:
     """The resource report of ``program`` (a :class:`~compiler.program.CompiledProgram`).
 
     Parameters
@@ -67,7 +67,9 @@ def build_report(program, *, sim_results: Sequence | None = None,
     real_bits : int
         Bits per real value of the frame I/O (complex: twice).
     n_angle_bins : int, optional
-        Angle bins of the RA map when the chain computes none (CARRADA: 256).
+        Angle bins of an RA map the chain does not compute (CARRADA's: 256), for the frame
+        I/O of a chain whose angle stage runs elsewhere; None (the default): an RA map row
+        only when the chain computes one.
 
     Returns
     -------
@@ -81,7 +83,10 @@ def build_report(program, *, sim_results: Sequence | None = None,
     >>> g = Graph.from_yaml(Path("examples/chains/carrada_rd_oscfar.yaml"))
     >>> rep = build_report(CompiledProgram(graph=g))
     >>> [(r["name"], round(r["memory_kB"], 1)) for r in rep.data["frame_io"]]
-    [('raw_cube', 262.1), ('rd_map', 32.8), ('ra_map', 131.1)]
+    [('raw_cube', 262.1), ('rd_map', 32.8)]
+    >>> rep = build_report(CompiledProgram(graph=g), n_angle_bins=256)  # CARRADA's RA map
+    >>> [(r["name"], round(r["memory_kB"], 1)) for r in rep.data["frame_io"]][-1]
+    ('ra_map', 131.1)
     """
     profile = load_profile(program.target)
     rate = float(frame_rate_hz or 10.0)  # the ReportPass gives the option frame_rate_hz

@@ -1,4 +1,4 @@
-"""The classifier's row of paper 000's Table 3: inputs, neurons, synapses, steps, instances.
+"""The classifier's row of Vogginger et al.'s Table 3: inputs, neurons, synapses, steps, instances.
 
 Counted on the lowered network of one ``classifier`` node, **per instance** (one ROI
 sequence; the batch axes, e.g. ``object``, are instances):

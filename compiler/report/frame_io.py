@@ -1,4 +1,4 @@
-r"""Frame I/O figures (the top of paper 000's Table 3): memory and bandwidth of one frame's data.
+r"""Frame I/O figures (the top of Vogginger et al.'s Table 3): memory and bandwidth of a frame.
 
 For a tensor of :math:`n` values of :math:`b` bits at :math:`f` frames/s:
 

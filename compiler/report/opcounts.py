@@ -1,4 +1,4 @@
-r"""Operations per cell under test (paper 000's Table 1): conventional vs spiking CFAR.
+r"""Operations per cell under test (Vogginger et al.'s Table 1): conventional vs spiking CFAR.
 
 With :math:`N` training cells and :math:`T` time steps:
 

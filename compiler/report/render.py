@@ -32,7 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Report"]
+__all__ = ["TOTALS_HEADERS", "Report", "latency_line", "totals_line"]
+
+#: How the Markdown and the summaries name the totals whose keys alone would be ambiguous.
+TOTALS_HEADERS = {"synapses": "synapse_instances", "synapses_stored": "synapses_stored"}
 
 _STAGE_COLUMNS = ("node", "motif", "inputs", "neurons", "synapses", "time_steps", "repetitions",
                   "multiplexed", "steps_per_frame", "cores", "synapse_memory_bits",
@@ -53,13 +56,39 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def _table(rows: list[dict], cols: tuple[str, ...]) -> list[str]:
+def totals_line(totals: dict) -> str:
+    """The totals in one line, stored synapses and synapse instances each named.
+
+    A stored synapse is one weight entry held in a core's memory; an instance is one
+    connection of the network as wired (a shared matrix or a stencil kernel is stored
+    once and wired many times; docs/report.md).
+
+    Examples
+    --------
+    >>> print(totals_line({"inputs": 4, "neurons": 1064960, "synapses": 609157632,
+    ...                    "synapses_stored": 1032408, "cores": 92, "chips": 1,
+    ...                    "synapse_memory_bits": None}))
+    neurons 1 064 960, synapses stored 1 032 408 (synapse instances 609 157 632), cores 92, chips 1
+    """
+    parts = [f"neurons {_fmt(totals.get('neurons'))}"]
+    if "synapses_stored" in totals:
+        parts.append(f"synapses stored {_fmt(totals['synapses_stored'])} "
+                     f"(synapse instances {_fmt(totals.get('synapses'))})")
+    elif "synapses" in totals:
+        parts.append(f"synapse instances {_fmt(totals['synapses'])}")
+    parts += [f"{k} {_fmt(totals[k])}" for k in ("cores", "chips") if totals.get(k) is not None]
+    return ", ".join(parts)
+
+
+def _table(rows: list[dict], cols: tuple[str, ...],
+           headers: dict[str, str] | None = None) -> list[str]:
     # Not tabulate: a pipe table is these three lines once the cells are formatted (_fmt
     # does the numbers), and tabulate's "github" format pads every column, which would
     # change each stored report.md (artifacts are compared byte for byte) for a new core
     # dependency and no gain for a reader of the rendered Markdown.
     cols = tuple(c for c in cols if any(c in r for r in rows))
-    out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    names = [(headers or {}).get(c, c) for c in cols]
+    out = ["| " + " | ".join(names) + " |", "|" + "---|" * len(cols)]
     out += ["| " + " | ".join(_fmt(r.get(c)) for c in cols) + " |" for r in rows]
     return out
 
@@ -94,6 +123,37 @@ def _accuracy_lines(acc: dict, selection: dict | None) -> list[str]:
     return lines
 
 
+def latency_line(latency: dict) -> str:
+    """The real-time fit in seconds: latency per frame, frame period, whether it fits.
+
+    ``latency`` is a report's ``latency`` entry (the module docstring's schema).
+
+    Examples
+    --------
+    >>> print(latency_line({"total_steps": 263269, "total_s": 2.63269, "frame_period_s": 0.1,
+    ...                     "fits": False, "max_step_s": 3.798e-07,
+    ...                     "networks": [{"step_s": 1e-05}]}))  # doctest: +NORMALIZE_WHITESPACE
+    latency 2.633 s per frame (263 269 steps x 1e-05 s) against a frame period of 0.1 s:
+    does NOT fit (it would with steps of at most 3.798e-07 s)
+    >>> print(latency_line({"total_steps": 100, "total_s": None, "frame_period_s": 0.1,
+    ...                     "fits": None}))  # doctest: +NORMALIZE_WHITESPACE
+    latency 100 steps per frame, frame period 0.1 s: the target gives no step duration,
+    so no fit in seconds
+    """
+    steps, total_s = latency.get("total_steps"), latency.get("total_s")
+    period = latency["frame_period_s"]
+    if total_s is None:
+        return (f"latency {_fmt(steps)} steps per frame, frame period {_fmt(period)} s: the "
+                "target gives no step duration, so no fit in seconds")
+    step_s = next((r["step_s"] for r in latency.get("networks", ()) if r.get("step_s")), None)
+    per_step = f" x {step_s:g} s" if step_s else ""
+    fit = "fits" if latency["fits"] else "does NOT fit"
+    if not latency["fits"] and latency.get("max_step_s"):
+        fit += f" (it would with steps of at most {latency['max_step_s']:.4g} s)"
+    return (f"latency {total_s:.4g} s per frame ({_fmt(steps)} steps{per_step}) against a "
+            f"frame period of {period:g} s: {fit}")
+
+
 @dataclass
 class Report:
     """A resource report; ``data`` follows the schema in the module docstring."""
@@ -103,6 +163,10 @@ class Report:
     def to_json(self, indent: int = 2) -> str:
         """The report as JSON text."""
         return json.dumps(self.data, indent=indent, default=_json_default)
+
+    def latency_line(self) -> str:
+        """One line: latency per frame and frame period in seconds, and the fit."""
+        return latency_line(self.data["latency"])
 
     def to_markdown(self) -> str:
         """The report as Markdown tables."""
@@ -144,7 +208,8 @@ class Report:
             lines += ["", "## Number formats and dynamic-range mechanisms", ""]
             lines += _table(d["formats"], ("node", "item", "mechanism", "detail", "cost"))
         lines += ["", "## Totals", ""]
-        lines += _table([d["totals"]], tuple(d["totals"]))
+        lines += [totals_line(d["totals"]) + ".", ""]
+        lines += _table([d["totals"]], tuple(d["totals"]), TOTALS_HEADERS)
         lines += ["", f"## Spike traffic per frame ({d['traffic'].get('basis', '')})", ""]
         lines += _table([d["traffic"]], ("host_input", "inter_core", "inter_chip", "buffered"))
         if d["cores"]:

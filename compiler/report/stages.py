@@ -1,4 +1,4 @@
-r"""Per-stage rows (the bottom of paper 000's Table 3): one row per IR node of a network.
+r"""Per-stage rows (the bottom of Vogginger et al.'s Table 3): one row per IR node of a network.
 
 A **stage** is the set of populations whose ``origin["node"]`` is one IR node
 (populations without an origin form a stage of their own id).  Its

@@ -1,6 +1,6 @@
 """Figures of a sweep's summary rows (matplotlib, Agg backend, PNG files).
 
-* ``fig7`` — paper 000's Fig. 7: CFAR sensitivity and precision vs time steps,
+* ``fig7`` — Vogginger et al.'s Fig. 7: CFAR sensitivity and precision vs time steps,
   one panel per variant (every grid axis other than ``x`` that varies);
 * ``sft_rmse`` — S-FT RMSE vs time steps, one line per variant (e.g. policy);
 * ``weight_bits`` — a metric vs weight bits, one line per variant;

@@ -11,7 +11,7 @@ Built-in metrics
 ----------------
 ``cfar``
     Spiking decisions ``s`` vs the conventional CFAR ``c`` (``ir.evaluate``) on the
-    same frame (paper 000, Eq. 13-14), pooled over all cells of all frames:
+    same frame (Vogginger et al. 2022, Eq. 13-14), pooled over all cells of all frames:
 
     .. math:: \text{sensitivity} = \frac{TP}{TP+FN},\quad
               \text{precision} = \frac{TP}{TP+FP}
@@ -25,7 +25,7 @@ Built-in metrics
     clutter returns count: compare with ``false_alarms_per_frame_conventional``).
 ``sft_rmse``
     :func:`compiler.lowering.dft_common.sft_rmse` of the node's value against the
-    reference (NOTES §1.2 protocol), averaged over frames; option ``n_fft``.
+    reference (S-FT accuracy protocol), averaged over frames; option ``n_fft``.
 ``classifier_accuracy``
     The hook the classifier issue fills: ``argmax`` of the node's scores (last axis)
     against the frame's label; ``accuracy = correct / frames``.

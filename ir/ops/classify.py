@@ -1,6 +1,6 @@
 r"""The ``classifier`` op: a spiking classifier of region-of-interest (ROI) sequences.
 
-The op holds the layer stack of paper 000's radar object classifier
+The op holds the layer stack of Vogginger et al.'s radar object classifier
 (000_… §4.2): spiking convolutions, a recurrent LIF layer and a non-spiking
 integrator readout, run over a sequence of RD-map ROIs with **one time step
 per frame**. Weights live in an ``.npz`` file named by ``weights`` (never
@@ -239,7 +239,7 @@ class Classifier(Op):
             if t.ndim < 2:
                 raise self.fail(
                     node_id, f"needs an input with at least 2 axes (a map); got axes {t.names}"
-                )
+               )
             return TensorType(axes={"class": self.num_classes})
         wanted = (self.time_axis, *self.map_axes)
         if len(set(wanted)) != 3:
