@@ -26,7 +26,8 @@ _CAP = """
 import resource as _resource
 _pages = int(open("/proc/self/statm").read().split()[0])
 _now = _pages * _resource.getpagesize()
-_resource.setrlimit(_resource.RLIMIT_AS, ({cap} + _now, _resource.getrlimit(_resource.RLIMIT_AS)[1]))
+_hard = _resource.getrlimit(_resource.RLIMIT_AS)[1]
+_resource.setrlimit(_resource.RLIMIT_AS, ({cap} + _now, _hard))
 """
 
 
