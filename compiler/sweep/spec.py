@@ -41,7 +41,15 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, PositiveInt, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PositiveInt,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from ir.errors import CompileError
 from ir.model import short_repr
@@ -49,7 +57,7 @@ from ir.model import short_repr
 __all__ = ["SceneFrames", "FolderFrames", "MetricSpec", "FigureSpec", "SweepSpec", "Point",
            "load_spec", "parse_spec", "cell_key", "CellKey", "Canonical", "MAX_SWEEP_FILE_BYTES",
            "MAX_SWEEP_EXPANDED_BYTES", "MAX_SWEEP_POINTS", "MAX_SWEEP_GRID_BYTES",
-           "MAX_SWEEP_CELLS", "NAMED_AXES"]
+           "MAX_SWEEP_CELLS", "MAX_PATTERN_CHARS", "MAX_PATTERN_WILDCARDS", "NAMED_AXES"]
 
 #: Largest sweep file read (not a device, not a giant).
 MAX_SWEEP_FILE_BYTES = 1 << 20
@@ -63,6 +71,9 @@ MAX_SWEEP_POINTS = 10_000
 MAX_SWEEP_GRID_BYTES = 256 << 20
 #: Most cells (points × slices of ``frames_per_cell`` frames) of one sweep.
 MAX_SWEEP_CELLS = 100_000
+#: Longest folder-source ``pattern``, and the most wildcards (``*``, ``?``, ``[``) in it.
+MAX_PATTERN_CHARS = 255
+MAX_PATTERN_WILDCARDS = 8
 #: Grid axes besides :data:`compiler.compile.EXTRA_OPTIONS` (each a ``compile_graph`` argument,
 #: ``chain`` a key of ``chains``, ``mode`` the simulator engine).
 NAMED_AXES = ("chain", "target", "motifs", "calibration", "time_steps", "weight_bits", "mode")
@@ -92,11 +103,14 @@ class SceneFrames(_Model):
 
 
 class FolderFrames(_Model):
-    """Frames from ``.npy`` files (``np.load(..., allow_pickle=False)``), sorted by name.
+    """Frames from ``.npy`` files (:func:`radar.readers.read_npy_array`), sorted by name.
 
     The last ``calibration_frames`` files calibrate, the first ``n_frames`` of the
     others (default all) are scored.  ``labels`` names an ``.npy`` of one integer
     class per file (same order; never itself a frame) for ``classifier_accuracy``.
+    ``pattern`` is a glob relative to ``path``: not empty, no ``..`` and no ``**``,
+    at most :data:`MAX_PATTERN_CHARS` characters and :data:`MAX_PATTERN_WILDCARDS`
+    wildcards (``*``, ``?``, ``[``).
     """
 
     source: Literal["folder"]
@@ -106,6 +120,25 @@ class FolderFrames(_Model):
     calibration_frames: PositiveInt = 1
     frames_per_cell: PositiveInt = 25
     labels: str | None = None
+
+    @field_validator("pattern")
+    @classmethod
+    def _relative_glob(cls, pattern: str) -> str:
+        wildcards = sum(pattern.count(c) for c in "*?[")
+        parts = pattern.replace("\\", "/").split("/")
+        why = ("is empty" if not pattern.strip() else
+               f"is {len(pattern)} characters, over {MAX_PATTERN_CHARS}"
+               if len(pattern) > MAX_PATTERN_CHARS else
+               "holds a NUL byte" if "\0" in pattern else
+               "is absolute" if pattern.startswith(("/", "\\")) or pattern[1:2] == ":" else
+               "climbs out of the folder ('..')" if ".." in parts else
+               "is recursive ('**')" if "**" in pattern else
+               f"has {wildcards} wildcards, over {MAX_PATTERN_WILDCARDS}"
+               if wildcards > MAX_PATTERN_WILDCARDS else None)
+        if why:
+            raise ValueError(f"pattern {short_repr(pattern)} {why}; give a file-name glob "
+                             "inside the folder `path`, e.g. '*.npy' or 'run1/frame_*.npy'")
+        return pattern
 
 
 class MetricSpec(_Model):
