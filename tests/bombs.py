@@ -94,3 +94,16 @@ def mat_file(arrays: dict) -> bytes:
     out = io.BytesIO()
     savemat(out, arrays, do_compression=True)
     return out.getvalue()
+
+
+def mat_uncompressed_bomb(nbytes: int) -> bytes:
+    """A v5 ``.mat`` whose one uncompressed variable (a 1 x 1 double) declares ``nbytes``
+    in its tag and a data element of as many: a reader that trusts either reserves them."""
+    body = (_sub(6, struct.pack("<II", 6, 0)) + _sub(5, struct.pack("<ii", 1, 1))
+            + _sub(1, b"x") + struct.pack("<II", 9, nbytes) + bytes(8))
+    return _mat_header() + struct.pack("<II", 14, nbytes) + body
+
+
+def mat_v4_bomb(rows: int, cols: int) -> bytes:
+    """A v4 ``.mat`` header declaring a ``rows`` x ``cols`` double ``x`` and 8 bytes of data."""
+    return struct.pack("<iiiii", 0, rows, cols, 0, 2) + b"x\0" + bytes(8)

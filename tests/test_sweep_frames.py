@@ -99,7 +99,7 @@ def test_hostile_folder_sources_are_typed_errors(tmp_path):
     ("", "is empty"), ("/etc/*", "is absolute"), ("*" * 500, "500 characters, over 255"),
     ("a*" * 9, "has 9 wildcards, over 8"), ("../*.npy", r"climbs out of the folder \('\.\.'\)"),
     ("a/../../*", "climbs out"), ("**/*.npy", "is recursive"), ("x\0.npy", "NUL byte"),
-    ("C:*.npy", "is absolute")])
+    ("C:*.npy", "is absolute"), (".", "names no file"), ("./", "names no file")])
 def test_folder_patterns_are_relative_bounded_globs(pattern, why):
     from compiler.sweep.spec import parse_spec
     from ir.errors import CompileError

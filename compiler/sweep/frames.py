@@ -135,7 +135,7 @@ def folder_files(source, base_dir: str | Path) -> tuple[list[Path], list[Path]]:
     labels = None if source.labels is None else (Path(base_dir) / source.labels).resolve()
     try:  # the pattern is checked by FolderFrames; this is for one built without validation
         found = sorted(folder.glob(source.pattern))
-    except (ValueError, NotImplementedError, OSError) as err:
+    except (ValueError, NotImplementedError, OSError, IndexError) as err:
         raise RadarConfigError(f"sweep frames: pattern {source.pattern!r} cannot be matched "
                                f"in {str(folder)!r} ({err}); give a relative glob such as "
                                "'*.npy'") from None

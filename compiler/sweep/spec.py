@@ -131,6 +131,7 @@ class FolderFrames(_Model):
                if len(pattern) > MAX_PATTERN_CHARS else
                "holds a NUL byte" if "\0" in pattern else
                "is absolute" if pattern.startswith(("/", "\\")) or pattern[1:2] == ":" else
+               "names no file" if not [p for p in parts if p not in ("", ".")] else
                "climbs out of the folder ('..')" if ".." in parts else
                "is recursive ('**')" if "**" in pattern else
                f"has {wildcards} wildcards, over {MAX_PATTERN_WILDCARDS}"
