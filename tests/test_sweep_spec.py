@@ -150,8 +150,8 @@ def test_alias_bombs_in_a_sweep_file_are_refused_unexpanded(tmp_path):
     from capped import run_capped
 
     big, refs = "x" * 400_000, ", ".join(["*b"] * 120_000)  # 880 KB, 48 GB expanded
-    head = f"big: &b {big}\nname: t\nchains: {{a: c.yaml}}\nframes: {{source: scene}}\n"
-    cases = {"name.yaml": f"big: &b {big}\nname: [{refs}]\n",  # a refused field renders it
+    head = f"name: &b {big}\nchains: {{a: c.yaml}}\nframes: {{source: scene}}\n"
+    cases = {"mode.yaml": head + f"mode: [{refs}]\n",  # a refused field renders its value
              "options.yaml": head + f"options: {{input_bounds: {{x: [{refs}]}}}}\n"}  # hashed
     for name, text in cases.items():
         (tmp_path / name).write_text(text)
