@@ -24,7 +24,7 @@ from radar.files import MAX_ARRAY_BYTES, check_frame_shape, open_regular, pick, 
 from radar.mat_reader import MAT_NUMERIC_CLASSES, read_mat_array
 
 __all__ = ["MAX_ARRAY_BYTES", "MAT_NUMERIC_CLASSES", "read_mat_array", "read_npy_array",
-           "read_npz_array"]
+           "read_npz_array", "read_npz_arrays"]
 
 _DAMAGE = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, NotImplementedError,
            RuntimeError, ValueError, OSError, EOFError, KeyError, SyntaxError, IndexError,
@@ -79,40 +79,98 @@ def read_npz_array(path: str | Path, key: str | None = None, *,
     holds 2 arrays ('det', 'rd'); name the one to read (key=NAME; on the command line FILE.npz:NAME)
     """
     path = Path(path)
-    fmt = np.lib.format
     try:
         with open_regular(path, str(path)) as raw, zipfile.ZipFile(raw) as zf:
             members = {i.filename.removesuffix(".npy"): i for i in zf.infolist()
                        if i.filename.endswith(".npy")}
             name = pick(path, list(members), key, "array", "key=NAME; on the command line "
-                         "FILE.npz:NAME")
-            info = members[name]
-            with zf.open(info) as f:
-                version = fmt.read_magic(f)
-                shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
-                                   else fmt.read_array_header_2_0(f))
-                have = info.file_size - f.tell()
-            if dtype.hasobject:
-                raise RadarConfigError(f"{path}: array {name!r} is an object array, refused "
-                                       "(loading it would unpickle code); save numbers")
-            need = int(np.prod(shape, dtype=object)) * dtype.itemsize
-            if need > max_bytes:
-                raise RadarConfigError(f"{path}: array {name!r} declares {shape_text(shape)} "
-                                       f"{dtype} ({need} bytes), over the limit of {max_bytes} "
-                                       "bytes; save fewer frames per file")
-            check_frame_shape(f"{path}: array {name!r}", shape, frame_shape)
-            if need != have:
-                raise RadarConfigError(f"{path}: array {name!r} declares {shape_text(shape)} "
-                                       f"{dtype} ({need} bytes) but its member holds {have} bytes; "
-                                       "the file is damaged or truncated, write it again")
-            with zf.open(info) as f:
-                return fmt.read_array(f, allow_pickle=False)
+                        "FILE.npz:NAME")
+            return _member(zf, members[name], path, name, max_bytes, frame_shape)
     except RadarConfigError:
         raise
     except _DAMAGE as err:
         raise RadarConfigError(f"{path}: not a readable .npz archive of arrays "
                                f"({type(err).__name__}: {err}); write it with numpy.savez"
                                ) from None
+
+
+def read_npz_arrays(path: str | Path, *, max_bytes: int = MAX_ARRAY_BYTES
+                    ) -> dict[str, np.ndarray]:
+    """Every array of a ``.npz`` archive, each checked as :func:`read_npz_array` checks one.
+
+    Parameters
+    ----------
+    path : str or Path
+    max_bytes : int
+        Most bytes the arrays may declare together.
+
+    Returns
+    -------
+    dict of str to ndarray
+        By member name without ``.npy``, in the archive's order.
+
+    Raises
+    ------
+    RadarConfigError
+        As :func:`read_npz_array`; a member that is not a ``.npy`` array or is repeated;
+        the arrays declaring more than ``max_bytes`` together.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     np.savez_compressed(Path(tmp) / "w.npz", a=np.ones(2), b=np.zeros((1, 3)))
+    ...     arrays = read_npz_arrays(Path(tmp) / "w.npz")
+    >>> {k: v.shape for k, v in arrays.items()}
+    {'a': (2,), 'b': (1, 3)}
+    """
+    path = Path(path)
+    try:
+        with open_regular(path, str(path)) as raw, zipfile.ZipFile(raw) as zf:
+            arrays: dict[str, np.ndarray] = {}
+            left = max_bytes
+            for info in zf.infolist():
+                name = info.filename.removesuffix(".npy")
+                if name == info.filename or name in arrays:
+                    raise RadarConfigError(f"{path}: member {info.filename[:60]!r} is "
+                                           + ("repeated" if name in arrays else
+                                              "not a .npy array") + "; write it with numpy.savez")
+                arrays[name] = _member(zf, info, path, name, left, None)
+                left -= arrays[name].nbytes
+            return arrays
+    except RadarConfigError:
+        raise
+    except _DAMAGE as err:
+        raise RadarConfigError(f"{path}: not a readable .npz archive of arrays "
+                               f"({type(err).__name__}: {err}); write it with numpy.savez"
+                               ) from None
+
+
+def _member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path, name: str,
+            max_bytes: int, frame_shape: Sequence[int] | None) -> np.ndarray:
+    """One member's array, its header checked first: it is inflated only if it declares
+    at most ``max_bytes``, a shape the port takes and exactly the member's size."""
+    fmt = np.lib.format
+    with zf.open(info) as f:
+        version = fmt.read_magic(f)
+        shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
+                           else fmt.read_array_header_2_0(f))
+        have = info.file_size - f.tell()
+    if dtype.hasobject:
+        raise RadarConfigError(f"{path}: array {name!r} is an object array, refused "
+                               "(loading it would unpickle code); save numbers")
+    need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if need > max_bytes:
+        raise RadarConfigError(f"{path}: array {name!r} declares {shape_text(shape)} "
+                               f"{dtype} ({need} bytes), over the limit of {max_bytes} "
+                               "bytes; save fewer frames per file")
+    check_frame_shape(f"{path}: array {name!r}", shape, frame_shape)
+    if need != have:
+        raise RadarConfigError(f"{path}: array {name!r} declares {shape_text(shape)} "
+                               f"{dtype} ({need} bytes) but its member holds {have} bytes; "
+                               "the file is damaged or truncated, write it again")
+    with zf.open(info) as f:
+        return fmt.read_array(f, allow_pickle=False)
 
 
 def read_npy_array(path: str | Path, *, max_bytes: int = MAX_ARRAY_BYTES,

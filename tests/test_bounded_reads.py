@@ -136,3 +136,22 @@ def test_no_reader_waits_on_a_fifo(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     for name, text in zip(calls, json.loads(done.stdout), strict=True):
         assert "not a regular file" in text, (name, text)
+
+
+def test_classifier_weights_are_read_by_the_bounded_npz_reader(tmp_path):
+    import zipfile
+
+    import pytest
+    from bombs import npy_header
+
+    from ir.classifier_forward.weights import load_weights
+    from ir.errors import IRError
+    from ir.ops.classify import Classifier
+
+    # a member declaring 10**12 values: numpy's np.load raised _ArrayMemoryError
+    with zipfile.ZipFile(tmp_path / "w.npz", "w") as zf:
+        zf.writestr("conv.npy", npy_header((10**12,)) + bytes(16))
+    op = Classifier.model_construct(weights=str(tmp_path / "w.npz"))
+    with pytest.raises(IRError, match=r"cannot read weights .*w\.npz.*declares \(1000000000000,"
+                                      r"\) float64 \(8000000000000 bytes\), over the limit"):
+        load_weights(op, (16, 16), "cls")

@@ -4,11 +4,11 @@ Three classes, each with the contract of the suite (a correct result or a typed 
 the culprit) plus a bound on time and memory:
 
 * **bounded decompression for every reader** — one small bomb per reader (``.npz`` and
-  ``.mat`` inputs, ``.npy`` inputs, TI ``.bin``, an artifact's ``arrays.npz``, a folder
-  frame source), all read in one child interpreter under an address-space cap: each must be
-  refused in well under a second without reserving more than the cap (they declare or
-  inflate to 2-4 GiB from at most 4 MB); and hypothesis over the bombs' declared sizes and
-  shapes in-process, peak memory growth ≤ 1 GiB;
+  ``.mat`` inputs, ``.npy`` inputs, TI ``.bin``, an artifact's ``arrays.npz``, classifier
+  weights, a folder frame source), all read in one child interpreter under an
+  address-space cap: each must be refused in well under a second without reserving more
+  than the cap (they declare or inflate to 2-4 GiB from at most 4 MB); and hypothesis over
+  the bombs' declared sizes and shapes in-process, peak memory growth ≤ 256 MiB;
 * **grid and alias amplification in sweeps** — random grids (up to 40 axes of up to 12
   values), frame counts and alias fan-outs: parsing either refuses with a
   ``CompileError`` or gives a spec whose points can be planned, within bounded time;
@@ -88,6 +88,10 @@ def _cases(tmp) -> dict[str, tuple[str, str]]:
         "artifact arrays.npz": ("from pathlib import Path; from backends.npz_reader import "
                                 f"read_npz; read_npz(Path({str(tmp / 'art.npz')!r})."
                                 "read_bytes(), Path('arrays.npz'))", "is compressed"),
+        "classifier weights": ("from ir.classifier_forward.weights import load_weights; "
+                               "from ir.ops.classify import Classifier; load_weights(Classifier."
+                               f"model_construct(weights={str(tmp / 'in.npz')!r}), (16, 16), "
+                               "'cls')", "over the limit"),
         "folder frame": ("from compiler.sweep.frames import load_frames; from compiler.sweep."
                          "spec import FolderFrames; load_frames(FolderFrames(source='folder', "
                          f"path='frames'), {str(tmp)!r}, 0, 1, calibration=True)",
@@ -118,7 +122,8 @@ def test_every_reader_refuses_a_small_bomb_quickly_in_bounded_memory(tmp_path):
     results = json.loads(done.stdout.splitlines()[-1])
     for name, (_, why) in cases.items():
         kind, text, seconds = results[name]
-        assert kind in ("RadarConfigError", "RadarSNNError", "ArtifactError"), (name, kind, text)
+        assert kind in ("RadarConfigError", "RadarSNNError", "ArtifactError", "IRError"), (
+            name, kind, text)
         assert why in text, (name, text)
         assert "\n" not in text and seconds < 3.0, (name, seconds)
 
