@@ -136,7 +136,7 @@ def folder_files(source, base_dir: str | Path) -> tuple[list[Path], list[Path]]:
     try:  # the pattern is checked by FolderFrames; this is for one built without validation
         found = sorted(folder.glob(source.pattern))
     except (ValueError, NotImplementedError, OSError, IndexError) as err:
-        raise RadarConfigError(f"sweep frames: pattern {source.pattern!r} cannot be matched "
+        raise RadarConfigError(f"sweep frames: pattern {source.pattern[:80]!r} cannot be matched "
                                f"in {str(folder)!r} ({err}); give a relative glob such as "
                                "'*.npy'") from None
     files = [f for f in found if f.resolve() != labels]
