@@ -55,6 +55,8 @@ ARRAYS_FILE = "arrays.npz"
 ARTIFACT_ENTRIES = frozenset({MANIFEST_FILE, ARRAYS_FILE, "program.json", "report.md"})
 #: Largest manifest (``manifest.json``, ``program.json``) read: 64 MiB.
 MAX_MANIFEST_BYTES = 64 << 20
+#: Most bytes one read of an artifact file asks for past the size the file reports.
+_PIECE_BYTES = 1 << 20
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # the earliest date a zip entry can hold
 
 
@@ -268,8 +270,10 @@ def read_bytes(path: Path, *, limit: int = MAX_MANIFEST_BYTES) -> bytes:
     path : Path
     limit : int
         Largest size read; the size is checked before anything is read (a sparse
-        20 GB file is refused, not loaded), and at most ``limit + 1`` bytes are read
-        (a file that grows, or reports size 0 like ``/proc`` files).
+        20 GB file is refused, not loaded), and what the file holds is read in pieces of
+        at most its size or 1 MiB, never more than ``limit + 1`` bytes in all (a file that
+        grows, or reports size 0 like ``/proc`` files): a small file costs its own size
+        whatever ``limit`` is.
 
     Returns
     -------
@@ -292,7 +296,7 @@ def read_bytes(path: Path, *, limit: int = MAX_MANIFEST_BYTES) -> bytes:
                                 "directory written by backends.artifact.save?")
         with path.open("rb") as f:
             size = os.fstat(f.fileno()).st_size
-            data = f.read(limit + 1) if size <= limit else b""
+            data = _read_at_most(f, size, limit) if size <= limit else b""
         if size > limit or len(data) > limit:
             raise ArtifactError(f"{path}: {max(size, len(data))} bytes, over the limit of {limit} "
                                 "bytes for this file; not an artifact radarsnn wrote (or one too "
@@ -302,3 +306,19 @@ def read_bytes(path: Path, *, limit: int = MAX_MANIFEST_BYTES) -> bytes:
         raise ArtifactError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc}); is "
                             "this an artifact directory written by backends.artifact.save?"
                             ) from exc
+
+
+def _read_at_most(f, size: int, limit: int) -> bytes:
+    """What ``f`` holds, up to ``limit + 1`` bytes: first its ``size`` bytes, then 1 MiB pieces.
+
+    ``f.read(n)`` reserves ``n`` bytes before reading, so ``n`` is never more than the
+    file's size or one piece (``f.read(limit + 1)`` reserved 4 GiB for any ``arrays.npz``).
+    """
+    parts, total = [], 0
+    while total <= limit:
+        part = f.read(min(max(size - total, _PIECE_BYTES), limit + 1 - total))
+        if not part:
+            break
+        parts.append(part)
+        total += len(part)
+    return b"".join(parts)  # one part (the usual case) is returned as is, not copied

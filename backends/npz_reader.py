@@ -3,7 +3,9 @@ allocates anything.
 
 A zip member's declared size and its ``.npy`` header (shape and dtype) are read and checked
 against the member's bytes and :data:`MAX_ARRAYS_BYTES` first, so a forged header declaring
-``(10**12,)`` is refused instead of numpy allocating 7 TiB; damaged zips and deflate streams
+``(10**12,)`` is refused instead of numpy allocating 7 TiB.  Members must be stored
+uncompressed, as :func:`backends.artifact_io.npz_bytes` writes them: the file's size then
+bounds what is read, where a 4 MB deflated member could inflate to 4 GiB.  Damaged zips
 are :class:`~ir.errors.ArtifactError` like any other damage.  Arrays are read with
 ``allow_pickle=False``.
 """
@@ -56,9 +58,10 @@ def read_npz(raw: bytes, path: Path, *, limit: int = MAX_ARRAYS_BYTES
     ArtifactError
         If ``raw`` is not a zip of plain ``.npy`` members: a damaged zip or deflate
         stream, a member not named ``*.npy`` or named twice, members declaring more than
-        ``limit`` bytes, an object dtype, or a header whose shape and dtype do not
-        account exactly for the member's bytes (so a forged ``(10**12,)`` header is
-        refused before numpy allocates 7 TiB).
+        ``limit`` bytes, a compressed member (radarsnn stores them: a deflated one could
+        inflate to gigabytes from a few MB), an object dtype, or a header whose shape and
+        dtype do not account exactly for the member's bytes (so a forged ``(10**12,)``
+        header is refused before numpy allocates 7 TiB).
 
     Examples
     --------
@@ -80,6 +83,12 @@ limit of 100 bytes; not an artifact radarsnn wrote (or one too large to load)
                                     f"over the limit of {limit} bytes; not an artifact radarsnn "
                                     "wrote (or one too large to load)")
             arrays: dict[str, np.ndarray] = {}
+            packed = [i.filename for i in infos if i.compress_type != zipfile.ZIP_STORED]
+            if packed:
+                raise ArtifactError(f"{path}: member {short_repr(packed[0])} is compressed; "
+                                    "radarsnn stores every member uncompressed (a compressed "
+                                    "one is refused unread: a few MB could inflate to "
+                                    "gigabytes); re-emit the artifact")
             for info in infos:
                 key = info.filename.removesuffix(".npy")
                 if key == info.filename or key in arrays:

@@ -4,7 +4,7 @@ and the conventional DSP/CFAR reference.
 
 Submodules: :mod:`radar.config` (presets; the record in :mod:`radar.sensor`),
 :mod:`radar.scene`, :mod:`radar.scene_cases` (hard scenes drawn per seed), :mod:`radar.loaders`,
-:mod:`radar.ti_capture`, :mod:`radar.readers`,
+:mod:`radar.ti_capture`, :mod:`radar.readers`, :mod:`radar.mat_reader`, :mod:`radar.files`,
 :mod:`radar.windows`, :mod:`radar.dsp`, :mod:`radar.spectra`, :mod:`radar.cfar_window`,
 :mod:`radar.cfar`, :mod:`radar.cfar_theory`.  The detector is
 ``radar.cfar.cfar``; the package does not re-export it, so ``radar.cfar`` stays
@@ -17,7 +17,7 @@ from radar.cfar_window import n_training, training_mask
 from radar.config import PRESETS, RadarConfig, preset
 from radar.dsp import dft, dft_matrix, magnitude, to_db
 from radar.loaders import load_openradar, load_ti_chirps
-from radar.readers import read_mat_array, read_npz_array
+from radar.readers import read_mat_array, read_npy_array, read_npz_array
 from radar.scene import SCENE_PRESETS, Frame, Scene, Target, simulate_frame
 from radar.scene_cases import SCENE_CASES
 from radar.spectra import range_doppler_map
@@ -48,6 +48,7 @@ __all__ = [
     "preset",
     "range_doppler_map",
     "read_mat_array",
+    "read_npy_array",
     "read_npz_array",
     "read_ti_bin",
     "simulate_frame",

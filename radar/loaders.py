@@ -1,6 +1,7 @@
 """Loaders for the real radar captures shipped in ``radar/data`` (see its README.md).
 
-Files are read with ``numpy.load(..., allow_pickle=False)``: loading never runs code. Every
+Files are read with :func:`radar.readers.read_npy_array` (no pickle, the header checked
+before numpy allocates: at most 16 bytes per expected value): loading never runs code. Every
 file is checked for its expected dtype and shape; a missing, truncated or malformed file
 raises :class:`ir.errors.RadarConfigError` naming the file and what was expected. The
 captures root is ``$RADARSNN_DATA`` or the package's own ``radar/data`` (:func:`default_data_dir`).
@@ -14,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ir.errors import RadarConfigError
+from radar.readers import read_npy_array
 
 __all__ = ["OPENRADAR_CAPTURES", "SHIPPED_DATA_DIR", "default_data_dir", "load_openradar",
            "load_ti_chirps"]
@@ -72,13 +74,13 @@ def _load(path: Path, kind: str, shape: tuple[int, ...]) -> np.ndarray:
     if not path.is_file():
         raise RadarConfigError(f"capture file {path} is missing; expected a {kind} array "
                                f"of shape {shape}")
-    try:
-        array = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as err:
+    try:  # bounded: at most 16 bytes (complex128) per expected value, declared in the header
+        array = read_npy_array(path, max_bytes=16 * int(np.prod(shape)), what=str(path))
+    except RadarConfigError as err:
         raise RadarConfigError(
             f"capture file {path} cannot be read as a .npy array ({err}); expected a {kind} "
             f"array of shape {shape}; the file may be truncated or not a .npy file"
-        ) from err
+        ) from None
     if not isinstance(array, np.ndarray) or array.dtype.kind != kind[0]:
         raise RadarConfigError(
             f"capture file {path} holds dtype {getattr(array, 'dtype', type(array))}, "

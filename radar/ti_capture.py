@@ -30,6 +30,7 @@ import numpy as np
 
 from ir.errors import RadarConfigError
 from radar._checks import _positive_int
+from radar.files import check_frame_shape, open_regular
 
 __all__ = ["LAYOUT_KEYS", "MAX_CAPTURE_BYTES", "TI_AXES", "TI_DEVICES", "TiBinLayout",
            "read_ti_bin"]
@@ -45,6 +46,8 @@ TI_DEVICES = {"xwr16xx": "xwr16xx", "xwr18xx": "xwr16xx", "iwr6843": "xwr16xx",
 MAX_CAPTURE_BYTES = 4 << 30
 
 _LANES_XWR14XX = 4
+#: Words decoded at a time (their temporaries, ~40 bytes a word, come on top of the result).
+_PIECE_WORDS = 1 << 20
 
 
 #: ``--bin-layout`` key -> the :class:`TiBinLayout` field it sets (either name is accepted).
@@ -205,7 +208,7 @@ give samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]
 
 def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
                 n_frames: int | None = None, max_bytes: int = MAX_CAPTURE_BYTES,
-                squeeze: bool = False) -> np.ndarray:
+                frame_shape: tuple[int, ...] | None = None, squeeze: bool = False) -> np.ndarray:
     """Read a TI raw ADC capture into ``[frame, rx, chirp, sample]`` ADC codes.
 
     The result is always 4-D — one frame too, as ``(1, rx, chirp, sample)`` — unless
@@ -225,6 +228,9 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
         How many frames to read (default: all from ``first_frame``).
     max_bytes : int
         Most bytes the decoded array may take.
+    frame_shape : tuple of int, optional
+        One frame of the port the capture is for: ``layout.shape(1)[1:]`` must be it,
+        checked before anything is read.
     squeeze : bool
         Drop the frame axis when the result holds one frame (default False: always 4-D).
 
@@ -240,7 +246,14 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
     RadarConfigError
         The file is missing, unreadable or empty, its size is not a whole number of frames
         of ``layout``, the frames asked for are not in it, or the result would exceed
-        ``max_bytes``. Each message names the file, its size and the frame size.
+        ``max_bytes``, or the layout's frame is not ``frame_shape``. Each message names
+        the file, its size and the frame size.
+
+    Notes
+    -----
+    The result is allocated once and filled a piece at a time (about 2²⁰ words, or one
+    frame's or a few loops' worth), so decoding needs the result plus a few tens of MB,
+    not three times the result.
 
     Examples
     --------
@@ -285,40 +298,74 @@ def read_ti_bin(path: str | Path, layout: TiBinLayout, *, first_frame: int = 0,
         raise RadarConfigError(f"TI capture {path} holds {total} frame(s) of {frame_bytes} bytes "
                                f"(0..{total - 1}); {count if count > 0 else 'the'} frame(s) "
                                f"from {first} are not all in it: lower first_frame or n_frames")
+    check_frame_shape(f"TI capture {path} ({layout.describe()})", layout.shape(count),
+                      frame_shape)
     out_bytes = count * layout.words_per_frame * 8  # float64 per word
     if out_bytes > max_bytes:
         raise RadarConfigError(
             f"TI capture {path}: {count} frame(s) decode to {out_bytes} bytes, over the limit "
             f"of {max_bytes} bytes; read fewer frames at a time (n_frames=, first_frame=)")
-    with open(path, "rb") as f:
-        raw = np.fromfile(f, dtype="<i2", count=count * layout.words_per_frame,
-                          offset=first * frame_bytes)
-    cube = _decode(raw.astype(np.int32), layout, count)
-    return cube[0] if squeeze and count == 1 else cube
+    out = np.empty(layout.shape(count), dtype=np.complex128 if layout.complex else np.float64)
+    tx, rx, loops, n = layout.n_tx, layout.n_rx, layout.n_chirps, layout.n_samples
+    by_stream = out.reshape(count, tx, rx, loops, n)  # a view: [frame, tx, rx, loop, sample]
+    per_loop = layout.words_per_frame // loops
+    with open_regular(path, f"TI capture {path}") as f:
+        for fa, fb, la, lb in _pieces(layout, count):
+            words = (fb - fa) * layout.words_per_frame if lb - la == loops else \
+                (lb - la) * per_loop
+            f.seek(2 * ((first + fa) * layout.words_per_frame + la * per_loop))
+            raw = np.fromfile(f, dtype="<i2", count=words)
+            if raw.size != words:
+                raise RadarConfigError(f"TI capture {path} shrank while it was read; read it "
+                                       "again")
+            cube = _decode(raw.astype(np.int32), layout, fb - fa, lb - la)
+            # [frame, loop, tx, rx, sample] -> [frame, tx, rx, loop, sample] of the result
+            by_stream[fa:fb, :, :, la:lb] = cube.transpose(0, 2, 3, 1, 4)
+    return out[0] if squeeze and count == 1 else out
 
 
-def _decode(words: np.ndarray, layout: TiBinLayout, frames: int) -> np.ndarray:
-    """Frames of 16-bit words -> ``[frame, virtual rx, loop, sample]`` codes."""
+def _pieces(layout: TiBinLayout, count: int) -> list[tuple[int, int, int, int]]:
+    """``(first frame, stop frame, first loop, stop loop)`` of each piece decoded at once.
+
+    Whole frames while a frame is at most :data:`_PIECE_WORDS`, else a few loops of one
+    frame. xWR16xx complex words come in ``I0 I1 Q0 Q1`` groups of two samples: a piece
+    starts and ends on a group (pieces of loops only when a loop holds an even number of
+    samples, of frames only when a frame does; otherwise the capture in one piece).
+    """
+    loops, per = layout.n_chirps, layout.words_per_frame
+    paired = layout.device == "xwr16xx" and layout.complex
+    if paired and per % 4:
+        return [(0, count, 0, loops)]
+    per_loop = per // loops
+    if per <= _PIECE_WORDS or (paired and per_loop % 4):
+        step = max(1, _PIECE_WORDS // per)
+        return [(a, min(a + step, count), 0, loops) for a in range(0, count, step)]
+    step = max(1, _PIECE_WORDS // per_loop)
+    return [(f, f + 1, a, min(a + step, loops)) for f in range(count)
+            for a in range(0, loops, step)]
+
+
+def _decode(words: np.ndarray, layout: TiBinLayout, frames: int, loops: int) -> np.ndarray:
+    """``frames`` x ``loops`` loops of 16-bit words -> ``[frame, loop, tx, rx, sample]`` codes."""
     if layout.adc_bits < 16:  # sign-extend, as readDCA1000.m does
         top = 1 << (layout.adc_bits - 1)
         words = np.where(words >= top, words - (top << 1), words)
     words = words.astype(np.float64)
-    n, rx, loops, tx = layout.n_samples, layout.n_rx, layout.n_chirps, layout.n_tx
+    n, rx, tx = layout.n_samples, layout.n_rx, layout.n_tx
     if layout.device == "xwr16xx":
         if layout.complex:
             quads = words.reshape(-1, 4)  # I0 I1 Q0 Q1
             flat = np.empty(2 * len(quads), dtype=np.complex128)
-            flat[0::2] = quads[:, 0] + 1j * quads[:, 2]
-            flat[1::2] = quads[:, 1] + 1j * quads[:, 3]
+            flat.real[0::2], flat.imag[0::2] = quads[:, 0], quads[:, 2]
+            flat.real[1::2], flat.imag[1::2] = quads[:, 1], quads[:, 3]
         else:
             flat = words
-        cube = flat.reshape(frames, loops, tx, rx, n)
-    else:  # xwr14xx: per sample time, the 4 lanes (I of each, then Q of each if complex)
-        if layout.complex:
-            octets = words.reshape(-1, 2 * rx)
-            lanes = octets[:, :rx] + 1j * octets[:, rx:]
-        else:
-            lanes = words.reshape(-1, rx)
-        cube = lanes.reshape(frames, loops, tx, n, rx).transpose(0, 1, 2, 4, 3)
-    # [frame, loop, tx, rx, sample] -> [frame, tx * n_rx + rx, loop, sample]
-    return np.ascontiguousarray(cube.transpose(0, 2, 3, 1, 4).reshape(frames, tx * rx, loops, n))
+        return flat.reshape(frames, loops, tx, rx, n)
+    # xwr14xx: per sample time, the 4 lanes (I of each, then Q of each if complex)
+    if layout.complex:
+        octets = words.reshape(-1, 2 * rx)
+        lanes = np.empty((len(octets), rx), dtype=np.complex128)
+        lanes.real, lanes.imag = octets[:, :rx], octets[:, rx:]
+    else:
+        lanes = words.reshape(-1, rx)
+    return lanes.reshape(frames, loops, tx, n, rx).transpose(0, 1, 2, 4, 3)

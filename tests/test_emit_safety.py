@@ -231,3 +231,15 @@ def test_the_package_command_line_takes_inputs_as_radarsnn_run_does(tmp_path):
     twice = run(f"x={x}", "-i", f"x={x}", "-o", str(tmp_path / "o.npz"))
     assert twice.returncode == 2 and "given twice" in twice.stderr
     assert run("-o", str(tmp_path / "o.npz")).returncode == 2  # no input at all
+
+
+def test_the_command_line_refuses_a_fifo_at_once(tmp_path):
+    import os
+
+    pkg = emit_numpy(_tiny_network(), tmp_path, name="snn_fifo")
+    os.mkfifo(tmp_path / "x.npy")  # open() for reading waited for a writer forever
+    done = subprocess.run([sys.executable, "-m", pkg.name, f"x={tmp_path / 'x.npy'}", "-o",
+                           str(tmp_path / "out.npz")], cwd=pkg.parent, capture_output=True,
+                          text=True, timeout=60, check=False)
+    assert done.returncode == 1 and "not a regular file" in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr

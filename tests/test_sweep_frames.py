@@ -58,5 +58,57 @@ def test_folder_files_never_unpickle(tmp_path):
     np.save(tmp_path / "a.npy", np.array([{"x": 1}], dtype=object), allow_pickle=True)
     np.save(tmp_path / "b.npy", np.zeros(2))
     src = FolderFrames(source="folder", path=".", calibration_frames=1)
-    with pytest.raises(RadarConfigError, match=r"a.npy' is not a readable .npy array"):
+    with pytest.raises(RadarConfigError, match=r"a\.npy': object arrays are refused"):
         load_frames(src, tmp_path, 0, 1)
+
+
+def test_hostile_folder_sources_are_typed_errors(tmp_path):
+    import os
+
+    from bombs import npy_header
+    from capped import run_capped
+
+    for i in range(3):
+        np.save(tmp_path / f"f{i}.npy", np.zeros(2))
+    os.mkfifo(tmp_path / "f3.npy")  # a reader opening it would wait for a writer forever
+    done = run_capped(
+        "from compiler.sweep.frames import folder_files\n"
+        "from compiler.sweep.spec import FolderFrames\nfrom ir.errors import RadarConfigError",
+        f"""
+        try:
+            folder_files(FolderFrames(source="folder", path="."), {str(tmp_path)!r})
+            print("listed")
+        except RadarConfigError as err:
+            print(err)
+        """, timeout_s=30)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "f3.npy' matches '*.npy' but is not a regular file" in done.stdout
+    os.remove(tmp_path / "f3.npy")
+    (tmp_path / "f3.npy").write_bytes(npy_header((10**12,)) + bytes(16))  # declares 8 TB
+    src = FolderFrames(source="folder", path=".", calibration_frames=1)
+    with pytest.raises(RadarConfigError, match=r"f3\.npy': the header declares \(1000000000000,"
+                                               r"\) float64 \(8000000000000 bytes\), over the "
+                                               r"limit of 4294967296"):
+        load_frames(src, tmp_path, 0, 1, calibration=True)
+    np.save(tmp_path / "f3.npy", np.array(["a", "b", "c"]))
+    with pytest.raises(RadarConfigError, match=r"labels 'f3\.npy' hold <U1 values"):
+        load_frames(src.model_copy(update={"labels": "f3.npy"}), tmp_path, 0, 1)
+
+
+@pytest.mark.parametrize(("pattern", "why"), [
+    ("", "is empty"), ("/etc/*", "is absolute"), ("*" * 500, "500 characters, over 255"),
+    ("a*" * 9, "has 9 wildcards, over 8"), ("../*.npy", r"climbs out of the folder \('\.\.'\)"),
+    ("a/../../*", "climbs out"), ("**/*.npy", "is recursive"), ("x\0.npy", "NUL byte"),
+    ("C:*.npy", "is absolute"), (".", "names no file"), ("./", "names no file")])
+def test_folder_patterns_are_relative_bounded_globs(pattern, why):
+    from compiler.sweep.spec import parse_spec
+    from ir.errors import CompileError
+
+    spec = {"name": "t", "chains": {"a": {"name": "c", "nodes": [
+        {"id": "x", "op": "input", "shape": {"range": 2}}, {"id": "o", "op": "output",
+                                                             "input": "x"}]}},
+            "frames": {"source": "folder", "path": ".", "pattern": pattern}}
+    with pytest.raises(CompileError, match=rf"field 'frames\.folder\.pattern': Value error, "
+                                           rf"pattern .* {why}"):
+        parse_spec(spec)
+    assert FolderFrames(source="folder", path=".", pattern="run1/f_*.npy").pattern

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 import yaml
 from hypothesis import given
@@ -113,3 +115,86 @@ def test_hostile_sweep_files_are_compile_errors(tmp_path):
         load_spec(path)
     with pytest.raises(CompileError, match=r"cannot be read: not a regular file"):
         load_spec("/dev/zero")
+
+
+def _axes(n):
+    from compiler.compile import EXTRA_OPTIONS
+    from compiler.sweep.spec import NAMED_AXES
+
+    return sorted(set(EXTRA_OPTIONS) | set(NAMED_AXES) - {"chain"})[:n]
+
+
+def test_a_grid_is_counted_before_it_is_expanded():
+    import time
+
+    axes = _axes(33)
+    assert len(axes) == 33
+    start = time.perf_counter()
+    with pytest.raises(CompileError, match=r"the grid has 8589934592 points \(the product of "
+                                           r"its 33 axes' lengths \[2, 2, .*over the limit of "
+                                           r"10000 \(MAX_SWEEP_POINTS\)"):
+        parse_spec(_spec(grid={a: [0, 1] for a in axes}))
+    with pytest.raises(CompileError, match=r"100 points x 5000 slices of frames = 500000 cells, "
+                                           r"over the limit of 100000 \(MAX_SWEEP_CELLS\)"):
+        parse_spec(_spec(grid={"time_steps": list(range(1, 101))},
+                         frames={"source": "scene", "n_frames": 5000, "frames_per_cell": 1}))
+    with pytest.raises(CompileError, match=r"serialise to \d+ bytes of compile arguments, over "
+                                           r"the limit of 268435456"):
+        parse_spec(_spec(grid={"time_steps": list(range(1, 1001)),
+                               "input_bounds": [{"x": i, "pad": "p" * 300_000} for i in range(2)]}))
+    assert time.perf_counter() - start < 2.0
+    assert len(parse_spec(_spec(grid={a: [0, 1] for a in axes[:13]})).points()) == 8192
+
+
+def test_alias_bombs_in_a_sweep_file_are_refused_unexpanded(tmp_path):
+    from capped import run_capped
+
+    big, refs = "x" * 400_000, ", ".join(["*b"] * 120_000)  # 880 KB, 48 GB expanded
+    head = f"name: &b {big}\nchains: {{a: c.yaml}}\nframes: {{source: scene}}\n"
+    cases = {"mode.yaml": head + f"mode: [{refs}]\n",  # a refused field renders its value
+             "options.yaml": head + f"options: {{input_bounds: {{x: [{refs}]}}}}\n"}  # hashed
+    for name, text in cases.items():
+        (tmp_path / name).write_text(text)
+        assert (tmp_path / name).stat().st_size < 1 << 20
+    body = """
+        import json, time
+        out = []
+        for path in PATHS:
+            start = time.perf_counter()
+            try:
+                load_spec(path)
+                out.append(["read", 0])
+            except CompileError as err:
+                out.append([str(err)[:300], time.perf_counter() - start])
+        print(json.dumps(out))
+        """.replace("PATHS", repr([str(tmp_path / n) for n in cases]))
+    done = run_capped("from compiler.sweep.spec import load_spec\n"
+                      "from ir.errors import CompileError", body, timeout_s=60)
+    assert done.returncode == 0, done.stderr[-2000:]
+    for text, seconds in json.loads(done.stdout):
+        assert "more than 16777216 bytes once its aliases are expanded" in text, text
+        assert seconds < 10.0  # the YAML parse of 880 KB; expanding it took minutes
+
+
+def test_expanded_bytes_stops_on_cycles_and_counts_keys():
+    from compiler.sweep.spec import expanded_bytes
+
+    loop: list = []
+    loop.append(loop)
+    assert expanded_bytes(loop, 1000) > 1000
+    assert expanded_bytes({"ab": "cde"}, 100) == 8 + 2 + 3
+    with pytest.raises(CompileError, match=r"more than 16777216 bytes once its aliases"):
+        parse_spec(_spec(options={"input_bounds": {"x": ["y" * (1 << 20)] * 17}}))
+
+
+@given(parts=st.lists(st.recursive(
+    st.none() | st.booleans() | st.integers() | st.text(max_size=5) | st.floats(allow_nan=False),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner,
+                                                                 max_size=3),
+    max_leaves=6), min_size=1, max_size=4), split=st.integers(0, 4))
+def test_cell_keys_built_part_by_part_equal_the_whole(parts, split):
+    from compiler.sweep.spec import Canonical, CellKey
+
+    head, tail = parts[:split], parts[split:]
+    assert CellKey(*head).then(*tail).hex() == cell_key(*parts)
+    assert CellKey(*[Canonical.of(p) for p in parts]).hex() == cell_key(*parts)

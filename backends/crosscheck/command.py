@@ -110,7 +110,9 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
                               "spike with the reference engine")
     p.add_argument("artifact", type=Path, metavar="ARTIFACT",
                    help="a network folder (backends.save) or a program folder")
-    p.add_argument("--with", dest="model", required=True, choices=["lava", "nengo-loihi"])
+    p.add_argument("--with", dest="model", required=True, choices=["lava", "nengo-loihi"],
+                   help="the bit-accurate model to compare with: Lava 0.10's fixed-point "
+                        "processes or NengoLoihi 1.1's emulator")
     p.add_argument("--build-env", action="store_true",
                    help="build the Python 3.10 cross-check environment first (cached)")
     p.add_argument("--inputs", type=Path, metavar="X.npz",

@@ -6,12 +6,17 @@ unpickling, each file's header checked before numpy allocates anything.
 :func:`radar.readers.read_mat_array`); or a raw TI capture ``X.bin`` read with the layout
 given by ``--bin-layout`` (:func:`radar.ti_capture.read_ti_bin`; a capture of one frame gives
 ``[rx, chirp, sample]``, of several ``[frame, rx, chirp, sample]``).
+
+When the ports' shapes are known (``shapes=``), each file's declared shape (its header,
+variable listing or ``--bin-layout``) is checked against its port before any data is read
+or inflated: a file cannot make a reader allocate more than the port could take.
 """
 
 from __future__ import annotations
 
 import argparse
 import re
+from collections.abc import Mapping, Sequence
 
 from ir.errors import RadarSNNError
 
@@ -28,7 +33,8 @@ _KEYED = re.compile(r"^(?P<path>.+\.(?:npz|mat)):(?P<key>[^:/\\]+)$", re.IGNOREC
 
 
 def load_arrays(items: list[str], ports: list[str], what: str, *,
-                bin_layout: str | None = None) -> dict:
+                bin_layout: str | None = None,
+                shapes: Mapping[str, Sequence[int]] | None = None) -> dict:
     """``[PORT=]FILE`` arguments → arrays by port (a bare file needs exactly one port).
 
     Parameters
@@ -41,6 +47,9 @@ def load_arrays(items: list[str], ports: list[str], what: str, *,
         Names the chain or artifact in messages.
     bin_layout : str, optional
         ``--bin-layout`` for ``.bin`` inputs (:meth:`radar.ti_capture.TiBinLayout.parse`).
+    shapes : mapping of str to tuple of int, optional
+        One frame's shape per port: a file must declare it or ``(frames, *shape)``,
+        checked before its data is read (:func:`radar.files.check_frame_shape`).
 
     Raises
     ------
@@ -79,7 +88,8 @@ def load_arrays(items: list[str], ports: list[str], what: str, *,
         from radar.ti_capture import TiBinLayout
 
         bin_layout = TiBinLayout.parse(bin_layout)
-    return {port: read_input(path, port, bin_layout=bin_layout)
+    shapes = shapes or {}
+    return {port: read_input(path, port, bin_layout=bin_layout, frame_shape=shapes.get(port))
             for port, (_, path) in given.items()}
 
 
@@ -89,8 +99,12 @@ def _split(spec: str) -> tuple[str, str | None]:
     return (match["path"], match["key"]) if match else (spec, None)
 
 
-def read_input(spec: str, port: str, *, bin_layout=None):
+def read_input(spec: str, port: str, *, bin_layout=None,
+               frame_shape: Sequence[int] | None = None):
     """The array for input ``port`` from ``X.npy``, ``X.npz[:KEY]``, ``X.mat[:VAR]`` or ``X.bin``.
+
+    ``frame_shape`` (one frame of the port, optional) is checked against the shape the
+    file declares before its data is read or decoded.
 
     Raises
     ------
@@ -104,83 +118,45 @@ def read_input(spec: str, port: str, *, bin_layout=None):
     path, key = _split(spec)
     suffix = path.lower().rpartition(".")[2]
     if suffix not in ("npz", "mat", "bin"):
-        return read_npy(path, f"input {path!r} for port {port!r}")
+        return read_npy(path, f"input {path!r} for port {port!r}", frame_shape=frame_shape)
     from radar.readers import read_mat_array, read_npz_array
     from radar.ti_capture import TiBinLayout, read_ti_bin
 
     try:
         if suffix == "npz":
-            return read_npz_array(path, key)
+            return read_npz_array(path, key, frame_shape=frame_shape)
         if suffix == "mat":
-            return read_mat_array(path, key)
+            return read_mat_array(path, key, frame_shape=frame_shape)
         if bin_layout is None:
             raise RadarSNNError(f"{path} is a raw TI capture: give its layout, e.g. "
                                 "--bin-layout samples=256,chirps=128,rx=4[,tx=2][,real]"
                                 "[,device=xwr14xx] (docs/cli.md, Inputs)")
         layout = (bin_layout if isinstance(bin_layout, TiBinLayout)
                   else TiBinLayout.parse(bin_layout))
-        return read_ti_bin(path, layout, squeeze=True)
+        return read_ti_bin(path, layout, frame_shape=frame_shape, squeeze=True)
     except RadarSNNError as err:
         raise type(err)(f"input for port {port!r}: {err}", node=err.node) from None
 
 
-def read_npy(path: str, what: str):
+def read_npy(path: str, what: str, *, frame_shape: Sequence[int] | None = None):
     """One array from a ``.npy`` file, never unpickling; ``what`` names it in errors.
 
-    The header is read first: object dtypes are refused, the data it declares must be
-    at most :data:`MAX_NPY_BYTES` and in the file, so a damaged or forged header cannot
-    make numpy allocate or parse beyond the file (a sparse file declaring 10¹² values
-    included).
+    :func:`radar.readers.read_npy_array` with the limit :data:`MAX_NPY_BYTES`: the header
+    is read first: object dtypes are refused, the data it declares must be at most
+    :data:`MAX_NPY_BYTES`, in the file and (with ``frame_shape``) the port's shape, so a
+    damaged or forged header cannot make numpy allocate or parse beyond the file (a sparse
+    file declaring 10¹² values included); a FIFO is refused at once, not waited on.
 
     Raises
     ------
     RadarSNNError
         Missing, empty, truncated or damaged files, not a regular file, object arrays,
-        a declared size over :data:`MAX_NPY_BYTES`, ``.npz`` archives (read those by
-        :func:`read_input` under a ``.npz`` name).
+        a declared size over :data:`MAX_NPY_BYTES`, a shape the port does not take,
+        ``.npz`` archives (read those by :func:`read_input` under a ``.npz`` name).
     """
-    import os
-    import stat
-    import tokenize
+    from radar.readers import read_npy_array
 
-    import numpy as np
-
-    fmt = np.lib.format
-    failures = (OSError, ValueError, EOFError, SyntaxError, tokenize.TokenError, OverflowError,
-                MemoryError, TypeError)
-    try:
-        with open(path, "rb") as f:
-            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):  # /dev/zero, a FIFO, a tty
-                raise RadarSNNError(f"cannot read {what}: not a regular file")
-            if f.read(4) == b"PK\x03\x04":
-                raise RadarSNNError(f"cannot read {what}: it is a .npz archive; name it "
-                                    "X.npz and give it as X.npz or X.npz:KEY")
-            f.seek(0)
-            version = fmt.read_magic(f)
-            shape, _, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
-                               else fmt.read_array_header_2_0(f))
-            if dtype.hasobject:
-                raise RadarSNNError(f"cannot read {what}: object arrays are refused (loading "
-                                    "them would unpickle code); save a numeric array")
-            need = int(np.prod(shape, dtype=object)) * dtype.itemsize
-            have = _remaining(f)
-            if need > MAX_NPY_BYTES:
-                raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
-                                    f"({need} bytes), over the limit of {MAX_NPY_BYTES} bytes "
-                                    "(MAX_NPY_BYTES); give fewer frames per file")
-            if have < need:
-                raise RadarSNNError(f"cannot read {what}: the header declares {shape} {dtype} "
-                                    f"({need} bytes) but the file holds {have}; truncated?")
-        return np.load(path, allow_pickle=False)
-    except failures as err:
-        raise RadarSNNError(f"cannot read {what}: {err or type(err).__name__}") from None
-
-
-def _remaining(f) -> int:
-    here = f.tell()
-    end = f.seek(0, 2)
-    f.seek(here)
-    return end - here
+    return read_npy_array(path, max_bytes=MAX_NPY_BYTES, frame_shape=frame_shape, what=what)
 
 
 def bin_layout_argument(p: argparse.ArgumentParser) -> None:

@@ -165,8 +165,10 @@ def compile_chain(chain: str | Path, target: str | None, *,
     # before the calibration arrays are read or drawn: they are part of the estimate
     check_compile(graph, max_memory_bytes=max_memory_bytes, max_time_s=max_time_s)
     if calibration:
+        types = graph.infer_types()
         inputs = load_arrays(calibration, graph.input_ids(), f"chain {chain}",
-                             bin_layout=bin_layout)
+                             bin_layout=bin_layout,
+                             shapes={port: types[port].shape for port in graph.input_ids()})
         note = GIVEN_NOTE
     else:  # the counts that depend on it: compiler.cli.notes
         inputs = synthetic_inputs(graph, seed=0)

@@ -37,10 +37,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     loaded = load(args.artifact)
     if is_program(args.artifact):
         ports = loaded.graph.input_ids()
+        types = loaded.graph.infer_types()
+        shapes = {port: types[port].shape for port in ports}
     else:
+        from backends.reference.encoding import value_shape
+
         ports = [e.port for e in loaded.encoders]
+        shapes = {port: value_shape(loaded, port) for port in ports}
     inputs = load_arrays(args.input, ports, f"artifact {args.artifact}",
-                         bin_layout=args.bin_layout)
+                         bin_layout=args.bin_layout, shapes=shapes)
     policy = "clip" if args.clip else args.out_of_range
     result = _simulate_frames(loaded, inputs, args, "reject" if policy == "reject" else "clip")
     if policy == "warn" and result.clipped:

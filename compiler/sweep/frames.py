@@ -125,13 +125,26 @@ def folder_files(source, base_dir: str | Path) -> tuple[list[Path], list[Path]]:
     Raises
     ------
     RadarConfigError
-        The folder is missing or holds fewer files than the calibration needs.
+        The folder is missing or holds fewer files than the calibration needs, the
+        pattern cannot be matched, or a match is not a regular file (a FIFO named
+        ``f3.npy`` would block its reader forever).
     """
     folder = Path(base_dir) / source.path
     if not folder.is_dir():
         raise RadarConfigError(f"sweep frames: folder {str(folder)!r} does not exist")
     labels = None if source.labels is None else (Path(base_dir) / source.labels).resolve()
-    files = sorted(f for f in folder.glob(source.pattern) if f.resolve() != labels)
+    try:  # the pattern is checked by FolderFrames; this is for one built without validation
+        found = sorted(folder.glob(source.pattern))
+    except (ValueError, NotImplementedError, OSError, IndexError) as err:
+        raise RadarConfigError(f"sweep frames: pattern {source.pattern[:80]!r} cannot be matched "
+                               f"in {str(folder)!r} ({err}); give a relative glob such as "
+                               "'*.npy'") from None
+    files = [f for f in found if f.resolve() != labels]
+    odd = next((f for f in files if not f.is_file()), None)  # a FIFO would block its reader
+    if odd is not None:
+        raise RadarConfigError(f"sweep frames: {str(odd)!r} matches {source.pattern!r} but is "
+                               "not a regular file (a folder, FIFO, device or socket); move it "
+                               "or narrow the pattern")
     n_cal = source.calibration_frames
     if len(files) <= n_cal:
         raise RadarConfigError(f"sweep frames: folder {str(folder)!r} has {len(files)} "
@@ -148,11 +161,24 @@ def folder_files(source, base_dir: str | Path) -> tuple[list[Path], list[Path]]:
 
 
 def _load_npy(path: Path) -> np.ndarray:
-    try:
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as err:
-        raise RadarConfigError(f"sweep frames: {str(path)!r} is not a readable .npy array "
-                               f"({err})") from None
+    """One frame file, by the bounded reader: its header checked before numpy allocates."""
+    from radar.readers import read_npy_array
+
+    return read_npy_array(path, what=f"sweep frame {str(path)!r}")
+
+
+def _labels(path: Path, n_scored: int, name: str) -> np.ndarray:
+    """The integer class per scored file of the labels file ``path``."""
+    table = _load_npy(path).ravel()
+    integral = table.dtype.kind in "iu" or (
+        table.dtype.kind == "f" and bool(np.all(np.isfinite(table) & (table == np.round(table)))))
+    if not integral:
+        raise RadarConfigError(f"sweep frames: labels {name!r} hold {table.dtype} values; give "
+                               "one integer class per file")
+    if table.size < n_scored:
+        raise RadarConfigError(f"sweep frames: labels {name!r} hold {table.size} "
+                               f"entries for {n_scored} scored files")
+    return table.astype(np.int64)
 
 
 def load_frames(source, base_dir: str | Path, start: int, stop: int,
@@ -177,7 +203,9 @@ def load_frames(source, base_dir: str | Path, start: int, stop: int,
     Raises
     ------
     RadarConfigError
-        An unknown scene, a missing folder or an unreadable file.
+        An unknown scene, a missing folder or an unreadable file (each file read by
+        :func:`radar.readers.read_npy_array`: regular files only, the header checked
+        against 4 GiB and the file's size before numpy allocates).
     """
     indices = tuple(range(start, stop))
     if source.source == "scene":
@@ -187,9 +215,6 @@ def load_frames(source, base_dir: str | Path, start: int, stop: int,
     files = (cal if calibration else scored)[start:stop]
     labels = None
     if source.labels is not None and not calibration:
-        table = _load_npy(Path(base_dir) / source.labels).astype(np.int64).ravel()
-        if table.size < len(scored):
-            raise RadarConfigError(f"sweep frames: labels {source.labels!r} hold {table.size} "
-                                   f"entries for {len(scored)} scored files")
+        table = _labels(Path(base_dir) / source.labels, len(scored), source.labels)
         labels = [int(table[i]) for i in indices]
     return FrameBatch(indices, [_load_npy(f) for f in files], [() for _ in files], labels)

@@ -40,7 +40,7 @@ from compiler.sweep.results import (
     summarize,
     write_summary,
 )
-from compiler.sweep.spec import SweepSpec, cell_key, load_spec
+from compiler.sweep.spec import Canonical, CellKey, SweepSpec, cell_key, load_spec
 from compiler.sweep.tasks import CellTask, compile_point, evaluate_cell, reference_values
 from ir.errors import CompileError
 
@@ -130,11 +130,15 @@ def plan_cells(spec: SweepSpec, registry: MetricRegistry | None = None) -> list[
         check_input(node, Graph.from_dict(graph).infer_types()[node], first)
         per_chain[name] = (node, _resolve_metrics(spec, graph, registry))
     slices = spec.slices()
+    # the chain, the source and the metrics serialised once, not once per point
+    keys = {name: CellKey(graph) for name, graph in chains.items()}
+    same = {name: Canonical.of(metrics) for name, (_, metrics) in per_chain.items()}
+    source = Canonical.of(source)
     plan = []
     for p in spec.points():
         node, metrics = per_chain[p.chain]
-        point = cell_key(chains[p.chain], p.compile_args, p.mode, p.out_of_range, source,
-                         metrics)
+        point = keys[p.chain].then(p.compile_args, p.mode, p.out_of_range, source,
+                                   same[p.chain]).hex()
         plan.append({"point": point, "params": p.params, "chain": p.chain, "graph": chains[p.chain],
                      "compile_args": p.compile_args, "mode": p.mode,
                      "out_of_range": p.out_of_range, "input": node,
@@ -152,6 +156,7 @@ def _submit(ex, spec: SweepSpec, plan: list[dict], todo: set[str], registry) -> 
     programs = {p["point"]: ex.submit(compile_point, p["graph"], p["compile_args"], p["input"],
                                       cal, key=f"sweep-compile-{p['point']}") for p in needed}
     futures = []
+    keys = {p["chain"]: CellKey(p["graph"]) for p in needed}  # each chain hashed once
     for i, (a, b) in enumerate(spec.slices()):
         here = [p for p in needed if p["cells"][i] in todo]
         if not here:
@@ -164,7 +169,7 @@ def _submit(ex, spec: SweepSpec, plan: list[dict], todo: set[str], registry) -> 
                 nodes = sorted({m["node"] for m in p["metrics"]})
                 refs[p["chain"]] = ex.submit(
                     reference_values, p["graph"], p["input"], frames, nodes,
-                    key=f"sweep-reference-{cell_key(p['graph'], nodes, source, a, b)}")
+                    key=f"sweep-reference-{keys[p['chain']].then(nodes, source, a, b).hex()}")
             cell = p["cells"][i]
             task = CellTask(cell=cell, point=p["point"], params=p["params"], slice=(a, b),
                             input=p["input"], mode=p["mode"], metrics=p["metrics"],
@@ -218,6 +223,10 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
     from tqdm import tqdm
 
     start = time.perf_counter()
+    if max_cells is not None and (isinstance(max_cells, bool) or not isinstance(max_cells, int)
+                                  or max_cells < 0):
+        raise CompileError(f"max_cells={max_cells!r}: give a whole number of cells >= 0 "
+                           "(0: plan only)")
     spec = spec if isinstance(spec, SweepSpec) else load_spec(spec)
     registry = metrics or default_metrics()
     out = check_output(out_dir, folder=True)  # not a file, a device, a NUL byte

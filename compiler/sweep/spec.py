@@ -9,6 +9,12 @@ resumption.  Its id is the hash of everything that determines its result
 (:func:`cell_key`), so a re-run skips cells already done and an edited spec
 recomputes exactly the cells it changed.
 
+Every size is bounded before anything is expanded: the spec's data after YAML alias
+expansion (:data:`MAX_SWEEP_EXPANDED_BYTES`, counted without building it), the grid's
+points (:data:`MAX_SWEEP_POINTS`, the product of the axis lengths) and the bytes those
+points' compile arguments serialise to (:data:`MAX_SWEEP_GRID_BYTES`, from the values'
+sizes), and the cells (:data:`MAX_SWEEP_CELLS`, points × slices).
+
 Examples
 --------
 >>> spec = SweepSpec.model_validate({
@@ -29,6 +35,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,12 +53,28 @@ from pydantic import (
 )
 
 from ir.errors import CompileError
+from ir.model import short_repr
 
 __all__ = ["SceneFrames", "FolderFrames", "MetricSpec", "FigureSpec", "SweepSpec", "Point",
-           "load_spec", "parse_spec", "cell_key", "MAX_SWEEP_FILE_BYTES", "NAMED_AXES"]
+           "load_spec", "parse_spec", "cell_key", "CellKey", "Canonical", "MAX_SWEEP_FILE_BYTES",
+           "MAX_SWEEP_EXPANDED_BYTES", "MAX_SWEEP_POINTS", "MAX_SWEEP_GRID_BYTES",
+           "MAX_SWEEP_CELLS", "MAX_PATTERN_CHARS", "MAX_PATTERN_WILDCARDS", "NAMED_AXES"]
 
 #: Largest sweep file read (not a device, not a giant).
 MAX_SWEEP_FILE_BYTES = 1 << 20
+#: Most bytes a spec may hold once its YAML aliases are expanded (strings by length, every
+#: other value 8): 16 MiB, so 120 000 aliases of one 400 KB string are refused unexpanded.
+MAX_SWEEP_EXPANDED_BYTES = 16 << 20
+#: Most grid points (compiles) of one sweep: the product of the axis lengths.
+MAX_SWEEP_POINTS = 10_000
+#: Most bytes the points' compile arguments may serialise to, all points together (what
+#: hashing the cell ids reads): 256 MiB.
+MAX_SWEEP_GRID_BYTES = 256 << 20
+#: Most cells (points × slices of ``frames_per_cell`` frames) of one sweep.
+MAX_SWEEP_CELLS = 100_000
+#: Longest folder-source ``pattern``, and the most wildcards (``*``, ``?``, ``[``) in it.
+MAX_PATTERN_CHARS = 255
+MAX_PATTERN_WILDCARDS = 8
 #: Grid axes besides :data:`compiler.compile.EXTRA_OPTIONS` (each a ``compile_graph`` argument,
 #: ``chain`` a key of ``chains``, ``mode`` the simulator engine).
 NAMED_AXES = ("chain", "target", "motifs", "calibration", "time_steps", "weight_bits", "mode")
@@ -81,11 +104,14 @@ class SceneFrames(_Model):
 
 
 class FolderFrames(_Model):
-    """Frames from ``.npy`` files (``np.load(..., allow_pickle=False)``), sorted by name.
+    """Frames from ``.npy`` files (:func:`radar.readers.read_npy_array`), sorted by name.
 
     The last ``calibration_frames`` files calibrate, the first ``n_frames`` of the
     others (default all) are scored.  ``labels`` names an ``.npy`` of one integer
     class per file (same order; never itself a frame) for ``classifier_accuracy``.
+    ``pattern`` is a glob relative to ``path``: not empty, no ``..`` and no ``**``,
+    at most :data:`MAX_PATTERN_CHARS` characters and :data:`MAX_PATTERN_WILDCARDS`
+    wildcards (``*``, ``?``, ``[``).
     """
 
     source: Literal["folder"]
@@ -95,6 +121,26 @@ class FolderFrames(_Model):
     calibration_frames: PositiveInt = 1
     frames_per_cell: PositiveInt = 25
     labels: str | None = None
+
+    @field_validator("pattern")
+    @classmethod
+    def _relative_glob(cls, pattern: str) -> str:
+        wildcards = sum(pattern.count(c) for c in "*?[")
+        parts = pattern.replace("\\", "/").split("/")
+        why = ("is empty" if not pattern.strip() else
+               f"is {len(pattern)} characters, over {MAX_PATTERN_CHARS}"
+               if len(pattern) > MAX_PATTERN_CHARS else
+               "holds a NUL byte" if "\0" in pattern else
+               "is absolute" if pattern.startswith(("/", "\\")) or pattern[1:2] == ":" else
+               "names no file" if not [p for p in parts if p not in ("", ".")] else
+               "climbs out of the folder ('..')" if ".." in parts else
+               "is recursive ('**')" if "**" in pattern else
+               f"has {wildcards} wildcards, over {MAX_PATTERN_WILDCARDS}"
+               if wildcards > MAX_PATTERN_WILDCARDS else None)
+        if why:
+            raise ValueError(f"pattern {short_repr(pattern)} {why}; give a file-name glob "
+                             "inside the folder `path`, e.g. '*.npy' or 'run1/frame_*.npy'")
+        return pattern
 
 
 class MetricSpec(_Model):
@@ -190,15 +236,19 @@ class SweepSpec(_Model):
         from compiler.compile import EXTRA_OPTIONS
 
         known = set(NAMED_AXES) | set(EXTRA_OPTIONS)
+        sizes = {}
         for axis, values in self.grid.items():
             if axis not in known:
-                raise ValueError(f"grid axis {axis!r} is not a compile option; known: "
+                raise ValueError(f"grid axis {short_repr(axis)} is not a compile option; known: "
                                  f"{sorted(known)}")
             if not values:
                 raise ValueError(f"grid axis {axis!r} has no values; give at least one")
-            texts = [json.dumps(v, sort_keys=True) for v in values]
+            texts = [json.dumps(v, sort_keys=True, default=str) for v in values]
             if len(set(texts)) != len(texts):
-                raise ValueError(f"grid axis {axis!r} repeats a value in {values}; list each once")
+                raise ValueError(f"grid axis {axis!r} repeats a value in {short_repr(values)}; "
+                                 "list each once")
+            sizes[axis] = [len(t) for t in texts]
+        self._check_grid_size(sizes)
         unknown = sorted(set(self.options) - set(EXTRA_OPTIONS))
         if unknown:
             raise ValueError(f"options {unknown} are not compile options; known: "
@@ -218,6 +268,39 @@ class SweepSpec(_Model):
             raise ValueError(f"figure files {files} repeat (one would overwrite the other); "
                              "give each figure a distinct `name`")
         return self
+
+    def _check_grid_size(self, sizes: dict[str, list[int]]) -> None:
+        """Refuse a grid of too many points or bytes, from the axis lengths and value sizes."""
+        n_points = math.prod(len(v) for v in sizes.values())
+        if n_points > MAX_SWEEP_POINTS:
+            lengths = short_repr([len(v) for v in sizes.values()])
+            raise ValueError(f"the grid has {n_points} points (the product of its {len(sizes)} "
+                             f"axes' lengths {lengths}), over the limit of "
+                             f"{MAX_SWEEP_POINTS} (MAX_SWEEP_POINTS); split it into several "
+                             "sweeps or drop axes")
+        base = len(json.dumps(self.options, sort_keys=True, default=str)) + 64
+        grid_bytes = n_points * base + sum(n_points // len(v) * sum(v) for v in sizes.values())
+        if grid_bytes > MAX_SWEEP_GRID_BYTES:
+            raise ValueError(f"the grid's {n_points} points serialise to {grid_bytes} bytes of "
+                             f"compile arguments, over the limit of {MAX_SWEEP_GRID_BYTES} "
+                             "(MAX_SWEEP_GRID_BYTES); use fewer points or shorter values")
+        if self.frames.source == "scene":
+            self.check_cells(math.ceil(self.frames.n_frames / self.frames.frames_per_cell),
+                             n_points)
+
+    def n_points(self) -> int:
+        """The grid's points: the product of its axis lengths (nothing expanded)."""
+        return math.prod(len(v) for v in self.grid.values())
+
+    @staticmethod
+    def check_cells(n_slices: int, n_points: int) -> None:
+        """Refuse more than :data:`MAX_SWEEP_CELLS` cells (``ValueError`` as a validator
+        raises it; :meth:`slices` turns it into a :class:`CompileError`)."""
+        if n_slices * n_points > MAX_SWEEP_CELLS:
+            raise ValueError(f"{n_points} points x {n_slices} slices of frames = "
+                             f"{n_slices * n_points} cells, over the limit of {MAX_SWEEP_CELLS} "
+                             "(MAX_SWEEP_CELLS); raise frames_per_cell, score fewer frames or "
+                             "use fewer points")
 
     # ------------------------------------------------------------------ expansion
     def chain_dict(self, name: str) -> dict[str, Any]:
@@ -249,6 +332,10 @@ class SweepSpec(_Model):
     def slices(self) -> list[tuple[int, int]]:
         """``(start, stop)`` frame indices of each cell's slice."""
         n, step = self.n_frames(), self.frames.frames_per_cell
+        try:
+            self.check_cells(math.ceil(n / step), self.n_points())
+        except ValueError as err:
+            raise CompileError(f"sweep {self.name!r}: {err}") from None
         return [(a, min(a + step, n)) for a in range(0, n, step)]
 
     def n_frames(self) -> int:
@@ -270,8 +357,63 @@ def cell_key(*parts: Any) -> str:
     >>> len(cell_key("x"))
     16
     """
-    text = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return CellKey(*parts).hex()
+
+
+class Canonical(bytes):
+    """A part already in :func:`cell_key`'s canonical JSON (:meth:`Canonical.of`), hashed as
+    is: a large part shared by many keys is serialised once."""
+
+    @classmethod
+    def of(cls, part: Any) -> Canonical:
+        """``part`` serialised as :func:`cell_key` serialises it."""
+        return cls(_canonical(part))
+
+
+def _canonical(part: Any) -> bytes:
+    if isinstance(part, Canonical):
+        return bytes(part)
+    return json.dumps(part, sort_keys=True, separators=(",", ":"), default=str).encode()
+
+
+class CellKey:
+    """:func:`cell_key` built a part at a time: a prefix is serialised and hashed once and
+    shared by every key that extends it (the chain, for each of the grid's points).
+
+    ``CellKey(a).then(b, c).hex() == cell_key(a, b, c)``: the hash of the canonical JSON
+    list, fed item by item.
+
+    Examples
+    --------
+    >>> chain = CellKey({"nodes": ["..."]})
+    >>> chain.then({"time_steps": 8}, "step").hex() == cell_key({"nodes": ["..."]},
+    ...                                                          {"time_steps": 8}, "step")
+    True
+    >>> CellKey(Canonical.of({"b": 1, "a": 2})).hex() == cell_key({"a": 2, "b": 1})
+    True
+    """
+
+    def __init__(self, *parts: Any) -> None:
+        self._hash, self._empty = hashlib.sha256(b"["), True
+        self._add(parts)
+
+    def _add(self, parts: tuple) -> None:
+        for part in parts:
+            self._hash.update((b"" if self._empty else b",") + _canonical(part))
+            self._empty = False
+
+    def then(self, *parts: Any) -> CellKey:
+        """A new key: this one's parts, then ``parts`` (this one is unchanged)."""
+        other = CellKey.__new__(CellKey)
+        other._hash, other._empty = self._hash.copy(), self._empty
+        other._add(parts)
+        return other
+
+    def hex(self) -> str:
+        """16 hex digits, as :func:`cell_key`."""
+        done = self._hash.copy()
+        done.update(b"]")
+        return done.hexdigest()[:16]
 
 
 def load_spec(path: str | Path) -> SweepSpec:
@@ -330,12 +472,48 @@ def parse_spec(data: dict[str, Any], *, label: str = "sweep spec") -> SweepSpec:
     ...
     ir.errors.CompileError: sweep spec: field 'chains': Field required; field 'frames': ...
     """
+    size = expanded_bytes(data, MAX_SWEEP_EXPANDED_BYTES)
+    if size > MAX_SWEEP_EXPANDED_BYTES:
+        raise CompileError(f"{label}: more than {MAX_SWEEP_EXPANDED_BYTES} bytes once its "
+                           "aliases are expanded (MAX_SWEEP_EXPANDED_BYTES); write the values "
+                           "out, or share fewer large ones")
     try:
         return SweepSpec.model_validate(data)
     except ValidationError as err:
         parts = []
-        for item in err.errors(include_url=False):
-            where = ".".join(str(p) for p in item["loc"]) or "<spec>"
-            given = f" (given {item['input']!r})" if item["type"] != "missing" else ""
-            parts.append(f"field {where!r}: {item['msg']}{given}")
+        for item in err.errors(include_url=False)[:8]:
+            where = ".".join(str(p)[:40] for p in item["loc"]) or "<spec>"
+            given = (f" (given {short_repr(item['input'])})" if item["type"] != "missing"
+                     else "")
+            parts.append(f"field {where!r}: {str(item['msg'])[:400]}{given}")
         raise CompileError(f"{label}: " + "; ".join(parts)) from None
+
+
+def expanded_bytes(data: Any, limit: int) -> int:
+    """The bytes ``data`` would hold with every shared value copied: strings by their length,
+    keys included, anything else 8; counting stops past ``limit`` (so a cycle or an alias
+    bomb costs at most ``limit`` steps).
+
+    Examples
+    --------
+    >>> big = "x" * 1000
+    >>> expanded_bytes({"a": [big] * 3}, 10**6), expanded_bytes([big] * 10**6, 5000) > 5000
+    (3017, True)
+    """
+    total, stack = 0, [data]
+    while stack and total <= limit:
+        item = stack.pop()
+        if isinstance(item, str | bytes):
+            total += len(item)
+        elif isinstance(item, dict):
+            total += 8
+            for key, value in item.items():
+                stack += (key, value)
+                if len(stack) > limit:
+                    break
+        elif isinstance(item, list | tuple):
+            total += 8
+            stack.extend(item[:limit - len(stack) + 1])
+        else:
+            total += 8
+    return total

@@ -18,9 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ir.errors import RadarConfigError
 from ir.ops.classify import Classifier
+from radar.readers import read_npz_arrays
 
-__all__ = ["load_weights", "save_weights"]
+__all__ = ["MAX_WEIGHT_BYTES", "load_weights", "save_weights"]
+
+
+#: Most bytes a classifier's weights file may declare: 256 MiB (the shipped classifier's
+#: ``examples/classifier/snn_default.npz`` is 23 KB).
+MAX_WEIGHT_BYTES = 256 << 20
 
 
 def load_weights(op: Classifier, input_shape: tuple[int, ...], node_id: str = "classifier",
@@ -48,12 +55,11 @@ def load_weights(op: Classifier, input_shape: tuple[int, ...], node_id: str = "c
         If the file is missing or unreadable, or its keys or shapes do not match.
     """
     file = Path(op.weights if path is None else path)
-    try:
-        with np.load(file, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
-    except (OSError, ValueError) as err:
+    try:  # every member's header checked before it is inflated (no pickle, no forged sizes)
+        arrays = read_npz_arrays(file, max_bytes=MAX_WEIGHT_BYTES)
+    except RadarConfigError as err:
         raise op.fail(node_id, f"cannot read weights {str(file)!r}: {err}; train them with "
-                               "examples/train_classifier.py or fix 'weights'") from err
+                               "examples/train_classifier.py or fix 'weights'") from None
     return op.check_weights(node_id, tuple(input_shape[-2:]), arrays)
 
 

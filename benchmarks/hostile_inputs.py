@@ -1,0 +1,111 @@
+"""Time and peak memory of the readers and the sweep planner on small hostile files.
+
+Each case runs in a fresh interpreter under an address-space cap (its size after imports +
+``--cap-mib``) and a timeout; the table gives the file's size, the seconds and the peak
+memory growth of the call, and how it ended. ``--code DIR`` measures another checkout
+(e.g. ``git archive OLD radar compiler ir backends | tar -x -C DIR``) on the same files.
+
+    python benchmarks/hostile_inputs.py [--cap-mib 6144] [--timeout-s 120] [--code DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # the bomb builders of the test suite
+
+_CHILD = """
+import json, resource, sys, time
+import numpy, scipy.io, radar.readers, compiler.compile, compiler.cli.arrays
+import compiler.sweep.run
+call = {call!r}
+pages = int(open("/proc/self/statm").read().split()[0])
+resource.setrlimit(resource.RLIMIT_AS, (pages * resource.getpagesize() + {cap}, -1))
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+start = time.perf_counter()
+try:
+    exec(call, {{}})
+    end = "read"
+except BaseException as err:
+    end = f"{{type(err).__name__}}: {{str(err)[:90]}}"
+print(json.dumps([time.perf_counter() - start,
+                  (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024, end]))
+"""
+
+
+def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
+    """Case -> (its file, the call), the files written into ``tmp``."""
+    import numpy as np
+    import yaml
+    from bombs import mat_bomb, npz_bomb
+
+    gib = 1 << 30
+    (tmp / "bomb.mat").write_bytes(mat_bomb(int(3.9 * gib)))
+    (tmp / "bomb.npz").write_bytes(npz_bomb((int(3.9 * gib) // 8,)))
+    np.zeros(48 << 20, dtype="<i2").tofile(tmp / "capture.bin")  # 96 MiB
+    big, refs = "x" * 400_000, ", ".join(["*b"] * 120_000)
+    (tmp / "aliases.yaml").write_text(f"name: &b {big}\nchains: {{a: c.yaml}}\n"
+                                      f"frames: {{source: scene}}\nmode: [{refs}]\n")
+    from compiler.compile import EXTRA_OPTIONS
+    from compiler.sweep.spec import NAMED_AXES
+
+    axes = sorted(set(EXTRA_OPTIONS) | set(NAMED_AXES) - {"chain"})[:33]
+    (tmp / "c.yaml").write_text(yaml.safe_dump({"name": "c", "nodes": [
+        {"id": "x", "op": "input", "shape": {"range": 4}},
+        {"id": "o", "op": "output", "input": "x"}]}))
+    (tmp / "grid.yaml").write_text(yaml.safe_dump({
+        "name": "g", "chains": {"a": "c.yaml"}, "grid": {a: [0, 1] for a in axes},
+        "frames": {"source": "scene", "n_frames": 1, "frames_per_cell": 1}}))
+    load = ("from compiler.cli.arrays import load_arrays; import inspect; load_arrays([{p!r}], "
+            "['x'], 'c', **({{'shapes': {{'x': {port}}}}} if 'shapes' in "
+            "inspect.signature(load_arrays).parameters else {{}}))")
+    return {
+        ".mat 1x1 double, 3.9 GiB data element": (tmp / "bomb.mat", load.format(
+            p=str(tmp / "bomb.mat"), port=(1,))),
+        ".npz member declaring 3.9 GiB, port (4,)": (tmp / "bomb.npz", load.format(
+            p=str(tmp / "bomb.npz"), port=(4,))),
+        ".bin 96 MiB, decoded": (tmp / "capture.bin", (
+            "from radar.ti_capture import TiBinLayout, read_ti_bin; read_ti_bin("
+            f"{str(tmp / 'capture.bin')!r}, TiBinLayout.parse('samples=256,chirps=128,rx=4'))")),
+        "sweep, 120 000 aliases of 400 KB": (tmp / "aliases.yaml", (
+            "from compiler.sweep.spec import load_spec; "
+            f"load_spec({str(tmp / 'aliases.yaml')!r})")),
+        "sweep, 33 axes x 2 values, planned": (tmp / "grid.yaml", (
+            "from compiler.sweep.run import plan_cells; from compiler.sweep.spec import "
+            f"load_spec; plan_cells(load_spec({str(tmp / 'grid.yaml')!r}))")),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print one line per case: bytes, seconds, peak growth (MiB), outcome."""
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--cap-mib", type=int, default=6144)
+    p.add_argument("--timeout-s", type=float, default=120.0)
+    p.add_argument("--code", type=Path, default=ROOT, help="the checkout to measure")
+    args = p.parse_args(argv)
+    env = {**os.environ, "PYTHONPATH": str(args.code.resolve()), "OPENBLAS_NUM_THREADS": "1"}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (path, call) in cases(Path(tmp)).items():
+            code = _CHILD.format(call=call, cap=args.cap_mib << 20)
+            try:
+                done = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                      text=True, timeout=args.timeout_s, env=env, cwd=tmp)
+                seconds, growth, end = json.loads(done.stdout.splitlines()[-1])
+                row = f"{seconds:9.4f} s {growth:8.0f} MiB  {end}"
+            except subprocess.TimeoutExpired:
+                row = f"over {args.timeout_s:.0f} s (killed)"
+            except (IndexError, ValueError):
+                row = f"child failed: {done.stderr.strip().splitlines()[-1:]}"
+            print(f"{name:42s} {path.stat().st_size:>10d} B {row}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
