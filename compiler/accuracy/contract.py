@@ -45,7 +45,10 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from compiler.accuracy.metrics import decision_figures, value_figures
+from compiler.accuracy.metrics import FIRM_MARGIN_DB, decision_figures, value_figures
+from ir import Graph
+from ir.interpreter import evaluate
+from ir.ops import Input, Output
 
 __all__ = ["Contract", "StageCheck", "Tolerances", "measure_contract", "split_folds"]
 
@@ -235,8 +238,9 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
             if want.dtype == bool:
                 src = graph.inputs_of(node)[0]
                 fig = decision_figures(got, want, np.asarray(reference[src]),
-                                       axes=_axes_of(graph, node, framed),
-                                       frames=n_frames).to_dict()
+                                       axes=_axes_of(graph, node, framed), frames=n_frames,
+                                       firm=_firm(graph, node, reference[src],
+                                                  program.evaluators)).to_dict()
                 kind = "decisions"
             else:
                 fig = value_figures(got, want).to_dict()
@@ -245,6 +249,26 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
                                      figures=fig, clipped=frac, upstream=inner))
     return Contract(stages=stages, tolerances=tol, n_frames=n_frames, held_out=held_out,
                     note=note)
+
+
+def _firm(graph, node: str, x: np.ndarray, evaluators) -> np.ndarray | None:
+    """The conventional detections of a CFAR node that hold with its threshold
+    :data:`~compiler.accuracy.metrics.FIRM_MARGIN_DB` higher (None: not a CFAR)."""
+    op = graph.op(node)
+    if not hasattr(op, "alpha_for"):
+        return None
+    types = graph.infer_types()
+    (src,) = graph.inputs_of(node)
+    t = types[src]
+    if t.domain not in ("power", "amplitude"):
+        return None
+    db = FIRM_MARGIN_DB / (10 if t.domain == "power" else 20)
+    alpha = op.alpha_for(op.window(node, t).n_train) * 10 ** db
+    raised = op.model_copy(update={"alpha": alpha, "pfa": None})
+    g = Graph(f"{graph.name}-firm")
+    g.add(Output(), g.add(raised, g.add(Input(shape=dict(t.axes), complex=t.complex,
+                                              domain=t.domain), id="x"), id="c"), id="o")
+    return np.asarray(evaluate(g, {"x": np.asarray(x)}, registry=evaluators)["o"], bool)
 
 
 def _segment_nodes(program, seg) -> set[str]:

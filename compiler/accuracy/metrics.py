@@ -23,7 +23,10 @@ against the conventional mask) and object by object: an **object** is a detected
 that is a local maximum of the conventional detector's input over its 3-cell
 neighbourhood along the detector's axes (as a target list is built); a conventional
 object is *kept* when the spiking mask holds a detection within ±1 bin of it, and a
-spiking object is *extra* when the conventional mask holds none within ±1 bin.
+spiking object is *extra* when the conventional mask holds none within ±1 bin. Only
+*firm* conventional objects count as ones to keep — those still detected with the
+threshold raised by :data:`FIRM_MARGIN_DB` (1 dB): a cell right at the threshold flips
+under any code's rounding, as it does between two runs of a real sensor.
 
 Examples
 --------
@@ -51,14 +54,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["NOISE_FACTOR", "LOST_DB", "DecisionFigures", "ValueFigures", "decision_figures",
-           "value_figures"]
+__all__ = ["FIRM_MARGIN_DB", "LOST_DB", "NOISE_FACTOR", "DecisionFigures", "ValueFigures",
+           "decision_figures", "value_figures"]
 
 #: Cells with ``|y| > NOISE_FACTOR · median|y|`` are signal cells (12 dB above the floor).
 NOISE_FACTOR = 4.0
 
 #: A signal cell decoded more than this many dB off its golden magnitude is lost.
 LOST_DB = 6.0
+
+#: A conventional detection is a firm object when it holds with the threshold this many dB
+#: higher (of power; of amplitude for an amplitude input).
+FIRM_MARGIN_DB = 1.0
 
 
 @dataclass(frozen=True)
@@ -155,7 +162,8 @@ def _near(mask: np.ndarray, axes: Sequence[int]) -> np.ndarray:
 
 
 def decision_figures(got: np.ndarray, want: np.ndarray, power: np.ndarray, *,
-                     axes: Sequence[int], frames: int = 1) -> DecisionFigures:
+                     axes: Sequence[int], frames: int = 1,
+                     firm: np.ndarray | None = None) -> DecisionFigures:
     """Cell- and object-level agreement of a spiking detection mask with the conventional one.
 
     Parameters
@@ -168,6 +176,10 @@ def decision_figures(got: np.ndarray, want: np.ndarray, power: np.ndarray, *,
         The axes the detector's window spans (other axes are a batch).
     frames : int
         How many frames the arrays hold (for ``extra_per_frame``).
+    firm : ndarray of bool, optional
+        The conventional detections that hold with a margin (e.g. with the threshold
+        raised by 1 dB): only these count as objects to keep; a conventional detection
+        right at the threshold flips under any code's rounding (default: every one).
 
     Returns
     -------
@@ -179,7 +191,7 @@ def decision_figures(got: np.ndarray, want: np.ndarray, power: np.ndarray, *,
     axes = tuple(int(a) % want.ndim for a in axes)
     hits = int(np.sum(got & want))
     n_want, n_got = int(want.sum()), int(got.sum())
-    want_objects = _peaks(want, power, axes)
+    want_objects = _peaks(want, power, axes) & (want if firm is None else np.asarray(firm))
     got_objects = _peaks(got, power, axes)
     kept = int(np.sum(want_objects & _near(got, axes)))
     extra = int(np.sum(got_objects & ~_near(want, axes)))
