@@ -124,7 +124,7 @@ class HardwareProfile(BaseModel):
     bias_mantissa_bits: _Count = Field(default=None, ge=2, le=64)
     bias_exponent_max: int = Field(default=0, ge=0, le=32)
     state_bits: _Count = Field(default=None, ge=2, le=64)
-    graded_spike_bits: _Count = Field(default=None, ge=1, le=64)
+    graded_spike_bits: _Count = Field(default=None, ge=2, le=64)
     per_neuron_scales: bool = False
     delay_bits: _Count = Field(default=None, ge=0, le=32)
     max_steps_per_frame: _Count = Field(default=None, ge=1)
