@@ -24,8 +24,8 @@ Traceback (most recent call last):
 ...
 ir.errors.CompileError: file 'x': a board takes its per-core budgets and formats from its chip \
 profile 'loihi'; it cannot set neurons_per_core (board fields: name, description, chips, \
-cores_per_chip, chip_profile, inter_chip_bandwidth_bit_s, inter_chip_latency_s, spike_message_bits, \
-unbounded)
+cores_per_chip, chip_profile, inter_chip_bandwidth_bit_s, inter_chip_latency_s, \
+spike_message_bits, unbounded)
 >>> board_fields({"chip_profile": "loihi", "name": "x", "chips": 2}, "file 'x'")
 Traceback (most recent call last):
 ...
