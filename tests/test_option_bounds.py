@@ -76,3 +76,11 @@ def test_a_one_bit_graded_payload_is_a_profile_error(tmp_path):
     p = compile_graph(g, two, calibration_inputs={"x": rng.normal(size=(3, 2, 32))},
                       time_steps=32)
     assert p.networks[0].meta["charging"]["f"]["payload_bits"] == 2
+
+
+def test_a_headroom_that_overflows_the_range_is_a_compile_error():
+    # 1e308 x the calibrated peak is inf: the input code cannot be built
+    rng = np.random.default_rng(0)
+    with pytest.raises(CompileError, match=r"node 'f' \(motif time\): .* headroom=1e\+308"):
+        compile_graph(_graph(), "loihi", calibration_inputs={"x": rng.normal(size=(3, N))},
+                      options={"headroom": 1e308})
