@@ -50,3 +50,8 @@ def test_a_callable_progress_still_runs():
     out = radarsnn.run_program(PROGRAM, {"a": np.ones((2, 3))},
                                progress=lambda done, total: seen.append((done, total)))
     assert out.outputs[GRAPH.output_ids()[0]].shape == (2, 3) and seen[-1] == (2, 2)
+
+
+def test_check_accuracy_needs_a_mapping_of_inputs():
+    with pytest.raises(SimulationError, match="check_accuracy: inputs must be a mapping"):
+        radarsnn.check_accuracy(PROGRAM, None)

@@ -147,6 +147,9 @@ def check_accuracy(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *
         raise SimulationError(f"check_accuracy(program={short_repr(program)}): takes a "
                               f"CompiledProgram, not {type(program).__name__}; compile one with "
                               "compile_graph")
+    if not isinstance(inputs, Mapping):
+        raise SimulationError(f"check_accuracy: inputs must be a mapping of input node id to "
+                              f"array, not {type(inputs).__name__}")
     graph = program.graph
     types = graph.infer_types()
     count = n_frames(types, inputs, f"program {graph.name!r}")
