@@ -85,6 +85,15 @@ def test_profile_fields_are_strict(tmp_path, field, value):
         _load(tmp_path, {**_doc("loihi"), field: value})
 
 
+def test_a_duration_may_be_written_without_a_dot(tmp_path):
+    path = tmp_path / "p.yaml"  # PyYAML reads 1e-5 (no dot) as a string
+    text = "".join(f"{k}: {'null' if v is None else str(v).lower() if isinstance(v, bool) else v}\n"
+                   for k, v in {**_doc("loihi"), "time_step_s": "1e-5"}.items())
+    path.write_text(text)
+    assert yaml.safe_load(text)["time_step_s"] == "1e-5"  # a string to PyYAML
+    assert load_profile(path).time_step_s == 1e-5
+
+
 def _small():
     graph = Graph.from_dict({"name": "small", "nodes": [
         {"id": "x", "op": "input", "shape": {"chirp": 2, "sample": 16}},

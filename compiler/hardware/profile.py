@@ -166,7 +166,8 @@ class HardwareProfile(BaseModel):
     @field_validator("time_step_s", "inter_chip_bandwidth_bit_s", "inter_chip_latency_s",
                      mode="before")
     @classmethod
-    def _number_not_bool(cls, value: Any) -> Any:
+    def _a_number(cls, value: Any) -> Any:
+        # a string stays allowed: PyYAML reads ``1e-5`` (no dot) as the string '1e-5'
         if isinstance(value, bool):
             raise ValueError("a number, not a boolean")
         return value
