@@ -84,3 +84,14 @@ def test_a_headroom_that_overflows_the_range_is_a_compile_error():
     with pytest.raises(CompileError, match=r"node 'f' \(motif time\): .* headroom=1e\+308"):
         compile_graph(_graph(), "loihi", calibration_inputs={"x": rng.normal(size=(3, N))},
                       options={"headroom": 1e308})
+
+
+def test_fft_radices_that_do_not_multiply_to_the_size_name_the_node_and_option():
+    g = Graph.from_dict({"name": "fft", "nodes": [
+        {"id": "x", "op": "input", "shape": {"sample": 32}},
+        {"id": "f", "op": "dft", "input": "x", "axis": "sample"},
+        {"id": "o", "op": "output", "input": "f"}]})
+    x = np.random.default_rng(0).normal(size=(3, 32))
+    with pytest.raises(CompileError, match=r"node 'f' \(time-fft\): fft_radices=\[4, 4\] .* 32"):
+        compile_graph(g, "loihi", motifs={"f": "time-fft"}, calibration_inputs={"x": x},
+                      options={"fft_radices": [4, 4]})

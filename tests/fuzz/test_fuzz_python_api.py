@@ -7,6 +7,7 @@ options are the fuzzed part (wrong types, NaN, negative/zero/huge values, unknow
 
 from __future__ import annotations
 
+import contextlib
 import math
 import tempfile
 import warnings
@@ -162,7 +163,7 @@ def test_facade_argument_types(folder, name, data, progress) -> None:
                 "input", "option", "artifact", "nonexistent", str(folder), PORT]
 
     def call():
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), contextlib.chdir(folder):  # a relative junk path too
             warnings.simplefilter("ignore")
             fn(*args, **kwargs)
 
