@@ -70,7 +70,7 @@ SETTINGS = st.sampled_from(FIELDS).flatmap(lambda f: st.tuples(st.just(f), st.on
     EDGES, JUNK)))
 
 
-@budget(0.6)
+@budget(0.3)
 @given(st.lists(SETTINGS, min_size=1, max_size=3),
        st.sampled_from([*BUILTIN_PROFILES, *BUILTIN_BOARDS]))
 def test_every_motif_option_value_compiles_or_is_a_typed_error(settings, target) -> None:
