@@ -2,9 +2,8 @@
 
 Inputs are read by :mod:`compiler.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
 ``.bin``); one with a leading frames axis runs frame after frame with a progress
-bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are refused by
-default (one ``error:`` line naming the count and ``--clip``); ``--clip`` clips them
-silently, ``--out-of-range warn`` clips them with one warning line (docs/cli.md).
+bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are clipped
+with one warning line by default (``--out-of-range``, docs/cli.md).
 """
 
 from __future__ import annotations
@@ -74,7 +73,7 @@ def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_rang
 
 
 def clipped_warning(clipped: dict[str, int]) -> str:
-    """The ``warning:`` line of ``radarsnn run --out-of-range warn`` when it clipped inputs.
+    """The ``warning:`` line of ``radarsnn run`` when it clipped inputs (``--out-of-range warn``).
 
     Examples
     --------
@@ -100,12 +99,11 @@ def add_parsers(sub) -> None:
                         "several ports)")
     bin_layout_argument(p)
     p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto")
-    p.add_argument("--out-of-range", choices=["reject", "warn", "clip"], default="reject",
+    p.add_argument("--out-of-range", choices=["warn", "clip", "reject"], default="warn",
                    help="input values above an encoder's calibrated range (a scene stronger "
-                        "than the calibration data): refuse them with an error naming the "
-                        "count (reject, the default), clip them and print one warning line "
-                        "with the count (warn), or clip silently (clip); a clipped count is in "
-                        "the summary and --json")
+                        "than the calibration data): clip them and print one warning line with "
+                        "the count (warn, the default), clip silently (clip), or refuse them "
+                        "with an error (reject); the count is in the summary and --json")
     p.add_argument("--clip", action="store_true", help="the same as --out-of-range clip")
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")

@@ -67,6 +67,7 @@ from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.options import ResonatorOptions
 from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.resonator_bounds import check_decay, check_gains, check_levels
 from compiler.lowering.resonator_fixed import (
     CHIP_COEF_BITS,
     Renorm,
@@ -128,38 +129,6 @@ def _bits(ctx: LoweringContext, node: str, ratio: float) -> tuple[int, int]:
     return bits, int(np.clip(room - bits, 0, e_max - (groups - 1) * (w_bits - 1)))
 
 
-def _check_levels(node: str, bits: int, x_max: float, peak: float) -> None:
-    """Refuse a stream code whose top level ``2^B − 1`` leaves the calibrated peak below one
-    level (``peak·(2^B − 1)/x_max < 1``): every sample would stream as 0, the DFT as 0.
-
-    The least bits are ``B_min = ⌈log₂(x_max/peak + 1)⌉`` (2 at the encoder headroom of 2).
-    """
-    if peak <= 0 or peak * ((1 << bits) - 1) >= x_max:
-        return
-    least = int(np.ceil(np.log2(x_max / peak + 1)))
-    raise CompileError(
-        f"node {node!r}: stream_bits={bits} gives {(1 << bits) - 1} level(s) over the encoder "
-        f"range {x_max:.4g}, so the calibrated peak {peak:.4g} streams as 0 (an all-zero "
-        f"DFT); give stream_bits >= {least} (or a smaller encoder_headroom)", node=node)
-
-
-def _check_decay(ctx: LoweringContext, node: str, rho: float) -> None:
-    """Refuse a decay below one coefficient step, ``ρ < 2^{−F}`` (``F`` fraction bits).
-
-    The fixed-point rotation ``(C, S)`` has ``C² + S² ≤ (ρ 2^F)²``, so below that bound the
-    only coefficient is ``(0, 0)``: every bin's gain ``g_k`` is 0 and the host decoder's
-    ``1/|g_k|`` is not finite.
-    """
-    opts = ctx.settings_of(ResonatorOptions)
-    f_bits = CHIP_COEF_BITS if opts.resonator_coef_bits is None else int(opts.resonator_coef_bits)
-    if rho * 2.0 ** f_bits < 1.0:
-        raise CompileError(
-            f"node {node!r}: resonator_decay={rho:g} is below one step of the {f_bits}-bit "
-            f"rotation coefficients (2^-{f_bits} = {2.0 ** -f_bits:.3g}): every coefficient "
-            f"rounds to 0; give resonator_decay >= {2.0 ** -f_bits:.3g} (or more "
-            "resonator_coef_bits)", node=node)
-
-
 def _state_top(ctx: LoweringContext) -> float:
     return 2.0 ** ((getattr(ctx.target, "state_bits", None) or 24) - 2)
 
@@ -196,7 +165,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     rec = calibration_of(ctx, node, node)
     full = rec.max_part * headroom_of(ctx) or 1.0  # largest output part (value units)
     bits, shift = _bits(ctx, node, full / x_max)
-    _check_levels(node, bits, x_max, rec_in.max_part)
+    check_levels(node, bits, x_max, rec_in.max_part)
     window = window_coefficients(op.window, n) if op.window else np.ones(n)
     names = list(in_type.axes)
     i_axis = names.index(axes.axis)
@@ -221,7 +190,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     integer = bool(getattr(ctx.target, "weight_bits", None))
     renorm = None
     if integer:
-        _check_decay(ctx, node, rho)
+        check_decay(node, rho, ctx.settings_of(ResonatorOptions).resonator_coef_bits)
         unit = code.step_of_level / 2 ** shift  # value of one state unit
         renorm, f_bits = _coefficients(ctx, node, theta, rho, m)
         c, s = renorm.c, renorm.s
@@ -278,10 +247,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     # host read-outs divide out each bin's known fixed-point gain |g_k| (magnitude drift)
     g_mag = (np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits, renorm=renorm))
              if f_bits else None)
-    if g_mag is not None and not np.all((g_mag > 0) & np.isfinite(g_mag)):
-        raise CompileError(f"node {node!r}: resonator_decay={rho:g} leaves a bin with no "
-                           f"response in {f_bits}-bit coefficients (gain 0); give a larger "
-                           "resonator_decay or resonator_coef_bits", node=node)
+    check_gains(node, rho, f_bits, g_mag)
     if graded:
         comp = {"gain_axis": axes.out_axis, "gains": tuple(g_mag)} if f_bits else {}
         dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit / 2,
