@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from backends import artifact
+from backends.arguments import directory_arg
 from backends.artifact import ARTIFACT_VERSION
 from backends.program_artifact import PROGRAM_VERSION, is_program, load_program, save_program
 from compiler.program import CompiledProgram
@@ -39,6 +40,7 @@ def save(obj: Any, directory: str | Path, **kwargs: Any) -> Path:
     :func:`backends.artifact.save`.
     """
 
+    directory = directory_arg(directory, "save")
     if isinstance(obj, CompiledProgram):
         return save_program(obj, directory, **kwargs)
     if not isinstance(obj, SpikingNetwork):
@@ -52,6 +54,7 @@ def save(obj: Any, directory: str | Path, **kwargs: Any) -> Path:
 
 def load(directory: str | Path, **kwargs: Any) -> Any:
     """Load what :func:`save` wrote: a program if ``program.json`` is there, else a network."""
+    directory = directory_arg(directory, "load")
     if is_program(directory):
         return load_program(directory)
     return artifact.load(directory, **kwargs)

@@ -67,6 +67,7 @@ from types import MappingProxyType
 import numpy as np
 from pydantic import ValidationError
 
+from backends.arguments import directory_arg, instance_arg
 from backends.artifact_codec import network_from_manifest, population_entry, projection_entry
 from backends.artifact_io import (
     ARRAYS_FILE,
@@ -210,8 +211,10 @@ def save(network: SpikingNetwork, directory: str | Path, *, extra: Mapping | Non
     ...     save(net, tmp).joinpath("manifest.json").is_file()
     True
     """
+    instance_arg(network, SpikingNetwork, "save", "network",
+                 "save a CompiledProgram with backends.save (radarsnn.save)")
+    folder = directory_arg(directory, "save")
     _, files = network_files(network, extra=extra, kinds=kinds)
-    folder = Path(directory)
     try:
         replace_directory(folder, lambda tmp: write_files(tmp, files), owned=saved_entries)
     except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
@@ -315,7 +318,7 @@ def load(directory: str | Path, *, kinds: Mapping[str, type] = PROJECTION_KINDS
     ...     load(save(net, tmp)).populations[0].axes
     ('z', 'a')
     """
-    folder = Path(directory)
+    folder = directory_arg(directory, "load")
     manifest = read_manifest(folder)
     arrays = _read_arrays(folder / ARRAYS_FILE, manifest)
     path = folder / MANIFEST_FILE

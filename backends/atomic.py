@@ -155,7 +155,7 @@ def stale_temporaries(target: Path) -> list[Path]:
         if not name.startswith(prefix) or not name.endswith(_SUFFIXES):
             continue
         pid, _, token = name[len(prefix):].rsplit(".", 1)[0].partition("-")
-        if pid.isdigit() and len(token) == 8 and not _alive(int(pid)):
+        if pid.isascii() and pid.isdigit() and len(token) == 8 and not _alive(int(pid)):
             found.append(target.parent / name)
     return sorted(found)
 

@@ -38,6 +38,7 @@ import logging
 from collections.abc import Mapping
 from pathlib import Path
 
+from backends.arguments import directory_arg, instance_arg
 from backends.artifact import load, network_files, read_manifest, write_files
 from backends.artifact_io import plain_json, render_json, saved_entries
 from backends.atomic import replace_directory, write_file
@@ -122,7 +123,9 @@ def save_program(program: CompiledProgram, directory: str | Path, *,
     place in one rename (:func:`backends.atomic.replace_directory`): a crash or a
     full disk leaves the previous program or the new one, never a mixture.
     """
-    folder = Path(directory)
+    instance_arg(program, CompiledProgram, "save_program", "program",
+                 "save a SpikingNetwork with backends.save (radarsnn.save)")
+    folder = directory_arg(directory, "save_program")
     try:
         replace_directory(folder, lambda tmp: _write_program(program, tmp, extra),
                           owned=saved_entries)
@@ -234,7 +237,7 @@ def load_program(directory: str | Path) -> CompiledProgram:
         profile that does not parse (the message names the file).
     """
 
-    folder = Path(directory)
+    folder = directory_arg(directory, "load_program")
     manifest = read_program_manifest(folder)
     path = folder / PROGRAM_FILE
     try:

@@ -377,6 +377,9 @@ def _compile_once(graph: Graph | str | Path, target: Any = "loihi2", *,
                          lowering=registry or default_registry(),
                          evaluators=dict(evaluators or {}))
     if progress is not None:
+        if not callable(progress):
+            raise CompileError(f"compile_graph: progress={progress!r:.60} is not callable; give "
+                               "a function progress(pass_name, message) or None")
         ctx.progress = progress
     program = CompiledProgram(graph=graph, options=options, target=profile,
                               calibration_policy=calibration)

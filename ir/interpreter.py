@@ -32,6 +32,7 @@ from ir.frames import frame, n_frames, stack_frames
 from ir.graph import Graph
 from ir.implementations import EVAL_REGISTRY, EvalRegistry, Implementation
 from ir.limits import MAX_VALUE_BYTES, check_limit, check_value_sizes
+from ir.model import short_repr
 from ir.ops import (
     Op,
 )
@@ -101,6 +102,12 @@ def evaluate(
     ir.errors.IRError: graph 'chain': missing input array(s) for ['x']; got arrays for ['y'] \
 which are not graph inputs (inputs: ['x'])
     """
+    if not isinstance(graph, Graph):
+        raise IRError(f"evaluate(graph={short_repr(graph)}): takes an ir.Graph, not "
+                      f"{type(graph).__name__}; read a chain file with Graph.from_yaml(path)")
+    if not isinstance(inputs, Mapping):
+        raise IRError(f"graph {graph.name!r}: inputs must be a mapping of input node id to "
+                      f"array, not {type(inputs).__name__}")
     impls = eval_registry(registry)
     graph.verify()
     types = graph.infer_types()

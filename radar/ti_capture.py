@@ -82,7 +82,8 @@ class TiBinLayout:
     ------
     RadarConfigError
         A count that is not a positive integer, an unknown device, ``n_rx != 4`` for
-        ``xwr14xx``, or ``adc_bits`` not 12, 14 or 16.
+        ``xwr14xx``, an odd number of complex samples per frame for ``xwr16xx`` (its
+        ``I0 I1 Q0 Q1`` pairs would cross frames), or ``adc_bits`` not 12, 14 or 16.
 
     Examples
     --------
@@ -112,6 +113,14 @@ class TiBinLayout:
                 f"n_rx={self.n_rx}: an xwr14xx capture always carries 4 LVDS lanes, unused "
                 "ones zero (SWRA581B §5); read it with n_rx=4 and keep the enabled channels, "
                 "e.g. adc[:, :2]")
+        values = self.n_samples * self.n_rx * self.n_chirps * self.n_tx
+        if family == "xwr16xx" and self.complex and values % 2:
+            raise RadarConfigError(
+                f"samples={self.n_samples}, rx={self.n_rx}, chirps={self.n_chirps}, "
+                f"tx={self.n_tx}: an xwr16xx complex capture stores samples in pairs "
+                f"(I0 I1 Q0 Q1, SWRA581B §6), so a frame of {values} complex samples (odd) "
+                "would split a pair across frames; check the counts against the sensor "
+                "configuration (profileCfg, frameCfg, channelCfg)")
         if self.adc_bits not in (12, 14, 16):
             raise RadarConfigError(f"adc_bits={self.adc_bits!r}: TI captures hold 12-, 14- or "
                                    "16-bit codes; use 12, 14 or 16")
@@ -145,7 +154,8 @@ class TiBinLayout:
         ------
         RadarConfigError
             An item that is not ``KEY=VALUE`` or a flag, an unknown key, a value that is not
-            a positive integer, a missing required key; or what :class:`TiBinLayout` refuses.
+            a positive integer in ASCII digits, a missing required key; or what
+            :class:`TiBinLayout` refuses.
 
         Examples
         --------
@@ -172,9 +182,9 @@ give samples=N,chirps=M,rx=R[,tx=T][,complex|real][,device=D][,bits=B]
             elif sep and key == "device":
                 fields["device"] = value
             elif sep and key in keys:
-                if not value.isdigit():
+                if not (value.isascii() and value.isdigit()) or len(value) > 9:  # not '²'
                     raise RadarConfigError(f"--bin-layout {text!r}: {key}={value!r} is not a "
-                                           "positive integer")
+                                           "positive integer (ASCII digits 0-9, at most 9)")
                 fields[keys[key]] = int(value)
             else:
                 raise RadarConfigError(f"--bin-layout {text!r}: {item!r} is not one of the "

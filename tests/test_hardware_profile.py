@@ -54,7 +54,7 @@ def test_user_profile_file(tmp_path):
     p = load_profile(ROOT / "examples" / "profiles" / "my_chip.yaml")
     assert (p.name, p.n_cores, p.max_delay_steps) == ("my_chip", 256, 31)
     f = tmp_path / "tiny.yml"
-    f.write_text("name: tiny\nneurons_per_core: 4\ncores_per_chip: 2\nchips: 1\n")
+    f.write_text("name: tiny\nunbounded: true\nneurons_per_core: 4\ncores_per_chip: 2\nchips: 1\n")
     assert load_profile(str(f)).n_cores == 2
     assert load_profile(load_profile("loihi")).name == "loihi"
 

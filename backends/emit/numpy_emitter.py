@@ -228,6 +228,8 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
                                  chain=comment(chain), imports=render(
                                      "\n$i", i=import_from(sorted(imports))),
                                  inputs=lit(tuple(inputs)), outputs=lit(tuple(outputs)),
+                                 shapes=lit(tuple((n, tuple(types[n].shape)) for n in inputs)
+                                            if program is not None else ()),
                                  body=indent(join(body)))
     for module in pkg.bodies:
         files[module + ".py"] = _stage_file(pkg, module, header)

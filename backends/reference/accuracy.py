@@ -44,9 +44,10 @@ import numpy as np
 
 from backends.reference.program import run_program
 from compiler.program import CompiledProgram
-from ir.errors import RadarSNNError
+from ir.errors import RadarSNNError, SimulationError
 from ir.frames import n_frames
 from ir.interpreter import evaluate
+from ir.model import short_repr
 
 __all__ = ["VALUE_RTOL", "AccuracyCheck", "NodeAccuracy", "check_accuracy"]
 
@@ -139,8 +140,16 @@ def check_accuracy(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *
     Raises
     ------
     IRError, SimulationError
-        Inputs that do not fit the program's graph (naming the input).
+        Inputs that do not fit the program's graph (naming the input); a ``program`` that
+        is not a :class:`~compiler.program.CompiledProgram`.
     """
+    if not isinstance(program, CompiledProgram):
+        raise SimulationError(f"check_accuracy(program={short_repr(program)}): takes a "
+                              f"CompiledProgram, not {type(program).__name__}; compile one with "
+                              "compile_graph")
+    if not isinstance(inputs, Mapping):
+        raise SimulationError(f"check_accuracy: inputs must be a mapping of input node id to "
+                              f"array, not {type(inputs).__name__}")
     graph = program.graph
     types = graph.infer_types()
     count = n_frames(types, inputs, f"program {graph.name!r}")

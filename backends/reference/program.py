@@ -259,7 +259,14 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     ``program.evaluators``); a host node whose op has none raises
     :class:`~ir.errors.IRError` naming the node and the fix.
     """
+    if not isinstance(program, CompiledProgram):
+        raise SimulationError(f"run_program(program={short_repr(program)}): takes a "
+                              f"CompiledProgram, not {type(program).__name__}; compile one with "
+                              "compile_graph (one SpikingNetwork: simulate)")
     where = f"program {program.graph.name!r}"
+    if progress is not None and not callable(progress):
+        raise SimulationError(f"{where}: progress={short_repr(progress)} is not callable; give "
+                              "a function progress(done, total) or None")
     if options is None:
         options = RunOptions(mode=mode, arithmetic=arithmetic, record_spikes=record_spikes,
                              out_of_range=out_of_range, max_memory_bytes=max_memory_bytes,

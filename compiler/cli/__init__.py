@@ -17,6 +17,10 @@ check that failed (``validate``); 2 on a usage error (a bad command line, argpar
 convention).  Either error is printed as one line ``error: …`` on stderr — a JSON
 object on stdout with ``--json`` — and no traceback unless ``--debug`` is given.
 
+A Python warning raised while a command runs (a ``ResonatorDriftWarning``, an
+``OutOfRangeWarning`` …) is printed as one line ``warning: …`` on stderr, not as
+Python's two-line ``file:line: Category: …`` form.
+
 Diagnostics go through :mod:`logging`, one logger per package (``ir``, ``radar``,
 ``compiler``, ``backends``, named by module); ``-v`` shows their INFO records on
 stderr (what each pass did and how long it took), ``-vv`` DEBUG.  Without ``-v``
@@ -36,6 +40,7 @@ import json
 import logging
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from importlib import import_module
 
@@ -43,7 +48,7 @@ from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
 __all__ = ["COMMAND_MODULES", "COMMAND_OF", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE",
-           "LOGGED_PACKAGES", "build_parser", "configure_logging", "main"]
+           "LOGGED_PACKAGES", "build_parser", "configure_logging", "main", "show_warning"]
 
 #: Exit status of a command that did its work.
 EXIT_OK = 0
@@ -191,6 +196,24 @@ def _modules_for(argv: Sequence[str]) -> tuple[str, ...] | None:
     return () if "--version" in argv and not {"-h", "--help"} & set(argv) else None
 
 
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Print a warning as one line ``warning: <message>`` (whitespace folded) on stderr.
+
+    The :func:`warnings.showwarning` of every command (its signature); the category, file
+    and line of Python's form are left out: the message names the node and the fix.
+
+    Examples
+    --------
+    >>> import io
+    >>> out = io.StringIO()
+    >>> show_warning(UserWarning("node 'f': drift 0.14,  over N=1024"), UserWarning,
+    ...              "x.py", 3, file=out)
+    >>> out.getvalue()
+    "warning: node 'f': drift 0.14, over N=1024\\n"
+    """
+    print("warning: " + " ".join(str(message).split()), file=file or sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 1 runtime error, 2 usage error)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -200,7 +223,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _error_exit(err, argparse.Namespace(json="--json" in argv))
     configure_logging(args.verbose)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():  # restores showwarning when the command ends
+            warnings.showwarning = show_warning
+            return args.func(args)
     except BrokenPipeError:  # the reader stopped (`radarsnn schema | head`): it had its output
         _silence_stdout()
         return 0

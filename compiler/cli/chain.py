@@ -112,6 +112,12 @@ def parse_options(items: list[str] | None) -> dict:
     --------
     >>> parse_options(["headroom=1.5", "cfar_ties=exact", "fft_radices=[4, 4]"])
     {'headroom': 1.5, 'cfar_ties': 'exact', 'fft_radices': [4, 4]}
+
+    YAML 1.1's boolean words stay words (no option is a boolean; ``resonator_renorm=off``
+    means ``'off'``):
+
+    >>> parse_options(["resonator_renorm=off", "x=true"])
+    {'resonator_renorm': 'off', 'x': True}
     """
     import yaml
 
@@ -125,6 +131,8 @@ def parse_options(items: list[str] | None) -> dict:
             raise UsageError(f"option {short_repr(item)} is not KEY=VALUE (e.g. headroom=1.5)")
         try:
             options[key] = load_yaml(value, error=RadarSNNError)
+            if isinstance(options[key], bool) and value.strip().lower() not in ("true", "false"):
+                options[key] = value.strip()  # on/off/yes/no: the word the user wrote
         except yaml.YAMLError as err:
             from ir.serialize import describe_yaml_error
 

@@ -5,6 +5,12 @@ there are.  The passes ``quantize``, ``split`` and ``place`` read nothing else
 about the target, so a new chip is a new YAML file, never new code.  Budgets
 given as ``null`` are unbounded.
 
+A profile **file** gives every field of :data:`REQUIRED_FIELDS` (``null`` where a budget is
+unbounded), so a field left out is an error, never a budget silently removed — unless the
+file says ``unbounded: true``: then each field it leaves out is unbounded (``null``, or the
+neutral format of :class:`HardwareProfile`'s defaults).  Counts and widths are integers
+(not ``true``, not ``1.0``), switches are booleans, and rates and durations are numbers.
+
 Examples
 --------
 >>> p = load_profile("loihi")
@@ -12,25 +18,44 @@ Examples
 (1024, 128, 63)
 >>> load_profile("unbounded").neurons_per_core is None
 True
+>>> _from_text("{name: mine, unbounded: true}", "file 'mine.yaml'").n_cores is None
+True
+>>> _from_text("{name: mine}", "file 'mine.yaml'")
+Traceback (most recent call last):
+...
+ir.errors.CompileError: file 'mine.yaml': missing profile fields cores_per_chip, chips, \
+neurons_per_core, input_axons_per_core, output_axons_per_core, synapse_memory_bits_per_core, \
+bits_per_synapse, weight_bits, threshold_bits, weight_exponent_max, threshold_mantissa_bits, \
+threshold_shift, bias_mantissa_bits, bias_exponent_max, state_bits, graded_spike_bits, \
+per_neuron_scales, delay_bits, max_steps_per_frame, time_step_s, shared_weights_per_core; \
+give each (null = unbounded), or 'unbounded: true' to leave budgets out on purpose
 """
 
 from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_serializer
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    Strict,
+    ValidationError,
+    field_validator,
+    model_serializer,
+)
 
 from ir.errors import CompileError
 from ir.model import short_repr
 from ir.parsing import load_yaml
 from ir.serialize import describe_yaml_error
 
-__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "HardwareProfile",
-           "load_profile"]
+__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "REQUIRED_FIELDS",
+           "HardwareProfile", "load_profile"]
 
 #: The per-core budgets, in the column order of every demand array.
 BUDGETS: tuple[str, ...] = ("neurons", "input_axons", "output_axons", "synapse_bits")
@@ -46,7 +71,9 @@ BUILTIN_BOARDS: tuple[str, ...] = ("kapoho_point", "nahuku32", "spinnaker2_48", 
 BOARD_FIELDS: tuple[str, ...] = ("chip_profile", "inter_chip_bandwidth_bit_s",
                                  "inter_chip_latency_s", "spike_message_bits")
 
-_Count = int | None
+_Int = Annotated[int, Strict()]  # not True, not 1.0: a count is an integer
+_Count = _Int | None
+_Bool = Annotated[bool, Strict()]  # not 1, not "yes"
 
 
 class HardwareProfile(BaseModel):
@@ -115,26 +142,35 @@ class HardwareProfile(BaseModel):
     input_axons_per_core: _Count = Field(default=None, ge=1)
     output_axons_per_core: _Count = Field(default=None, ge=1)
     synapse_memory_bits_per_core: _Count = Field(default=None, ge=1)
-    bits_per_synapse: int = Field(default=64, ge=1)
+    bits_per_synapse: _Int = Field(default=64, ge=1)
     weight_bits: _Count = Field(default=None, ge=2, le=64)
     threshold_bits: _Count = Field(default=None, ge=2, le=64)
-    weight_exponent_max: int = Field(default=0, ge=0, le=32)
+    weight_exponent_max: _Int = Field(default=0, ge=0, le=32)
     threshold_mantissa_bits: _Count = Field(default=None, ge=1, le=64)
-    threshold_shift: int = Field(default=0, ge=0, le=32)
+    threshold_shift: _Int = Field(default=0, ge=0, le=32)
     bias_mantissa_bits: _Count = Field(default=None, ge=2, le=64)
-    bias_exponent_max: int = Field(default=0, ge=0, le=32)
+    bias_exponent_max: _Int = Field(default=0, ge=0, le=32)
     state_bits: _Count = Field(default=None, ge=2, le=64)
-    graded_spike_bits: _Count = Field(default=None, ge=1, le=64)
-    per_neuron_scales: bool = False
+    graded_spike_bits: _Count = Field(default=None, ge=2, le=64)
+    per_neuron_scales: _Bool = False
     delay_bits: _Count = Field(default=None, ge=0, le=32)
     max_steps_per_frame: _Count = Field(default=None, ge=1)
     time_step_s: float | None = Field(default=None, gt=0)
-    shared_weights_per_core: bool = False
+    shared_weights_per_core: _Bool = False
     chip_profile: str | None = None
     inter_chip_bandwidth_bit_s: float | None = Field(default=None, gt=0)
     inter_chip_latency_s: float | None = Field(default=None, ge=0)
     spike_message_bits: _Count = Field(default=None, ge=1, le=1024)
     description: str = ""
+
+    @field_validator("time_step_s", "inter_chip_bandwidth_bit_s", "inter_chip_latency_s",
+                     mode="before")
+    @classmethod
+    def _a_number(cls, value: Any) -> Any:
+        # a string stays allowed: PyYAML reads ``1e-5`` (no dot) as the string '1e-5'
+        if isinstance(value, bool):
+            raise ValueError("a number, not a boolean")
+        return value
 
     @model_serializer(mode="wrap")
     def _without_unset_board_fields(self, handler):
@@ -183,6 +219,12 @@ class HardwareProfile(BaseModel):
         values = (self.neurons_per_core, self.input_axons_per_core,
                   self.output_axons_per_core, self.synapse_memory_bits_per_core)
         return np.array([np.inf if v is None else float(v) for v in values])
+
+
+#: Fields a chip profile file must give (``null`` where unbounded) unless it says
+#: ``unbounded: true``: every field but the name, the description and the board fields.
+REQUIRED_FIELDS: tuple[str, ...] = tuple(
+    k for k in HardwareProfile.model_fields if k not in ("name", "description", *BOARD_FIELDS))
 
 
 def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile:
@@ -245,6 +287,15 @@ give a path to a YAML profile file
     return _from_text(text, f"hardware profile file {str(path)!r}")
 
 
+def _check_flag(data: dict, label: str) -> bool:
+    """Pop the file's ``unbounded`` flag (a boolean; absent: false)."""
+    flag = data.pop("unbounded", False)
+    if not isinstance(flag, bool):
+        raise CompileError(f"{label}: field 'unbounded' = {short_repr(flag)}: give true (leave "
+                           "budgets out on purpose: each one left out is unbounded) or false")
+    return flag
+
+
 def _from_text(text: str, label: str) -> HardwareProfile:
 
     try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
@@ -256,13 +307,23 @@ def _from_text(text: str, label: str) -> HardwareProfile:
     if not isinstance(data, dict):
         raise CompileError(f"{label}: expected a mapping of profile fields, got "
                            f"{type(data).__name__}")
-    if data.get("chip_profile") is not None:  # a board: its chip's budgets, never loosened
+    board = data.get("chip_profile") is not None
+    if board:  # a board: its chip's budgets, never loosened
         from compiler.hardware.boards import board_fields  # boards imports this module
 
         data = board_fields(data, label)
+    else:
+        data = dict(data)
+        unbounded = _check_flag(data, label)
     try:  # model_validate: a non-string key is a field error, not a TypeError of **data
-        return HardwareProfile.model_validate(data)
+        profile = HardwareProfile.model_validate(data)
     except ValidationError as err:
         parts = [f"field '{'.'.join(map(str, e['loc']))}' = {short_repr(e.get('input'))}: "
                  f"{e['msg']}" for e in err.errors(include_url=False)]
         raise CompileError(f"{label}: " + "; ".join(parts)) from err
+    missing = [] if board or unbounded else [k for k in REQUIRED_FIELDS if k not in data]
+    if missing:  # after the fields' own checks: a misspelt field is named as such first
+        raise CompileError(f"{label}: missing profile fields {', '.join(missing)}; give each "
+                           "(null = unbounded), or 'unbounded: true' to leave budgets out on "
+                           "purpose")
+    return profile

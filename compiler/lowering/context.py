@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 from compiler.lowering.builder import NetworkBuilder
 from compiler.lowering.registry import HOST, LoweringRegistry
@@ -37,6 +37,7 @@ from compiler.snn import (
 )
 from ir import Graph
 from ir.errors import CompileError
+from ir.model import short_repr
 from ir.types import TensorType
 
 __all__ = ["LoweringContext", "lower_graph"]
@@ -218,6 +219,21 @@ def lower_graph(ctx: LoweringContext) -> list[Segment]:
         if rule is None:
             ctx.values[node] = ctx.run_on_host(node, inputs)
         else:
-            ctx.values[node] = rule(ctx, node, op, inputs)
+            try:
+                ctx.values[node] = rule(ctx, node, op, inputs)
+            except ValidationError as err:  # a derived value no code or neuron can hold
+                raise CompileError(_invalid_build(ctx, node, motif, err), node=node) from None
     return ctx.segments()
+
+
+def _invalid_build(ctx: LoweringContext, node: str, motif: str, err: ValidationError) -> str:
+    """The one-line message of a rule whose derived code, neuron or decoder is invalid (an
+    option value beyond what the calibrated range allows: ``headroom=1e308`` makes it inf)."""
+    given = {k: v for m in ctx.settings.values()
+             for k, v in m.model_dump(exclude_defaults=True).items()}
+    shown = ", ".join(f"{k}={short_repr(v)}" for k, v in sorted(given.items())) or "none"
+    first = err.errors(include_url=False)[0]["msg"]
+    return (f"node {node!r} (motif {motif}): the lowering built an invalid {err.title} "
+            f"({first}); compile options set: {shown}; give values the calibrated range "
+            "can hold (e.g. a smaller headroom or input_range) or another motif")
 

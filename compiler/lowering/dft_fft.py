@@ -193,7 +193,8 @@ def fft_stages(n: int, radices: tuple[int, ...] | None = None
     """
     radices = radix_plan(n) if radices is None else tuple(int(r) for r in radices)
     if int(np.prod(radices)) != n or min(radices, default=2) < 2:
-        raise CompileError(f"FFT radices {radices} must be integers >= 2 whose product is {n}")
+        raise CompileError(f"fft_radices={list(radices)} must be integers >= 2 whose product "
+                           f"is the transform size {n}")
     stages, size, bins = [], n, np.zeros(1, np.int64)
     for r in radices:
         b = size // r
@@ -307,7 +308,10 @@ def lower_fft(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> S
     in_type = ctx.types[value.node]
     axes = dft_axes(node, op, in_type)
     radices = ctx.settings_of(FftOptions).fft_radices
-    stages = op_stages(op, axes.n_in, None if radices is None else tuple(radices))
+    try:
+        stages = op_stages(op, axes.n_in, None if radices is None else tuple(radices))
+    except CompileError as err:  # the option's radices: name the node
+        raise CompileError(f"node {node!r} ({MOTIF}): {err}", node=node) from None
     split = "re_im" if in_type.complex else "none"
     found = calibrated_bound(ctx, value.node)
     x_bound = found if found else ctx.settings_of(FftOptions).input_range

@@ -73,6 +73,7 @@ from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.options import ResonatorOptions
 from compiler.lowering.registry import LoweringRegistry
+from compiler.lowering.resonator_bounds import check_decay, check_gains, check_levels
 from compiler.lowering.resonator_fixed import (
     CHIP_COEF_BITS,
     Renorm,
@@ -170,6 +171,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     rec = calibration_of(ctx, node, node)
     full = rec.max_part * headroom_of(ctx) or 1.0  # largest output part (value units)
     bits, shift = _bits(ctx, node, full / x_max)
+    check_levels(node, bits, x_max, rec_in.max_part)
     window = window_coefficients(op.window, n) if op.window else np.ones(n)
     names = list(in_type.axes)
     i_axis = names.index(axes.axis)
@@ -194,6 +196,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     integer = bool(getattr(ctx.target, "weight_bits", None))
     renorm = None
     if integer:
+        check_decay(node, rho, ctx.settings_of(ResonatorOptions).resonator_coef_bits)
         unit = code.step_of_level / 2 ** shift  # value of one state unit
         renorm, f_bits = _coefficients(ctx, node, theta, rho, m)
         c, s = renorm.c, renorm.s
@@ -258,6 +261,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     # host read-outs divide out each bin's known fixed-point gain |g_k| (magnitude drift)
     g_mag = (np.abs(bin_gains(c, s, theta, m, rho=rho, bits=f_bits, renorm=renorm))
              if f_bits else None)
+    check_gains(node, rho, f_bits, g_mag)
     if graded:
         comp = {"gain_axis": axes.out_axis, "gains": tuple(g_mag)} if f_bits else {}
         dec = Decoder(port=node, population=pop.id, kind="membrane", scale=unit / 2,

@@ -26,7 +26,9 @@ scale) and biases the bias mantissa/exponent; decays are rounded to multiples of
 ``1/4096``.  The record states, per projection, the unit, the exponent and terms, the
 largest and mean absolute error (and relative to its own ``max|w|``), the weights rounded
 to zero and the extra synapses of split terms; per population the threshold and bias
-errors.  A threshold that cannot fit raises :class:`~ir.errors.BudgetError` naming the
+errors.  A ``membrane`` decoder reads the state, so its scale is multiplied by its
+population's :math:`s_T` (``v' = v / s_T``); spike-time, count and mask decoders are
+unit-free.  A threshold that cannot fit raises :class:`~ir.errors.BudgetError` naming the
 node, the value and the limit.  Delays beyond ``2**delay_bits - 1`` steps are relayed or
 refused (:mod:`compiler.passes.relay`).
 
@@ -60,7 +62,7 @@ from compiler.passes.base import CompileContext, Pass
 from compiler.passes.relay import MAX_RELAY_STAGES, LongDelays, relay_long_delays
 from compiler.passes.split import describe
 from compiler.program import CompiledProgram, Segment
-from compiler.snn import DECAY_ONE, NeuronParams, Population, SpikingNetwork
+from compiler.snn import DECAY_ONE, Decoder, NeuronParams, Population, SpikingNetwork
 from ir.errors import BudgetError
 
 __all__ = ["MAX_RELAY_STAGES", "Quantize", "QuantizeRecord", "quantize", "relay_long_delays"]
@@ -215,6 +217,16 @@ def _quantize_params(pop: Population, unit: float, profile: HardwareProfile
     return new, info
 
 
+def _rescaled(dec: Decoder, units: dict[str, float]) -> Decoder:
+    """A ``membrane`` decoder in the quantized state: ``v' = v / s_T``, so its scale is
+    multiplied by the population's unit ``s_T`` (spike times, counts and masks are unit-free).
+    """
+    unit = units.get(dec.population, 1.0)
+    if dec.kind != "membrane" or unit == 1.0:
+        return dec
+    return dec.model_copy(update={"scale": dec.scale * unit})
+
+
 def _projection_terms(p, pop: Population, unit: float, exact: bool,
                       profile: HardwareProfile, record: QuantizeRecord) -> list:
     """``p`` in the target's weight format: itself, plus split terms of an exact weight."""
@@ -274,7 +286,7 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     net = relay_long_delays(network, profile, long_delays, record)
     if profile.weight_bits is None:
         return net, record
-    new_pops, new_projs = [], {}
+    new_pops, new_projs, units = [], {}, {}
     for pop in net.populations:
         incoming = net.incoming(pop.id)
         if pop.source:
@@ -301,9 +313,11 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
                         else (pop.params, {"scale": unit}))
         info.update(weights_coarsened_for_threshold=bool(coarsened), exact=exact)
         record.populations[pop.id] = info
+        units[pop.id] = unit
         new_pops.append(pop.model_copy(update={"params": params}))
     projections = [q for p in net.projections for q in new_projs.get(p.id, [p])]
-    out = replace(net, populations=new_pops, projections=projections)
+    out = replace(net, populations=new_pops, projections=projections,
+                  decoders=[_rescaled(d, units) for d in net.decoders])
     out.meta = {**net.meta, "quantized_for": profile.name}
     return out, record
 

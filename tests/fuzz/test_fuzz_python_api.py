@@ -7,6 +7,7 @@ options are the fuzzed part (wrong types, NaN, negative/zero/huge values, unknow
 
 from __future__ import annotations
 
+import contextlib
 import math
 import tempfile
 import warnings
@@ -131,3 +132,39 @@ def test_save_and_load_targets(folder, what, name, extra) -> None:
 
     outcome(call, [str(target), "extra", "graph", "network", "object", "Graph", "NoneType",
                    str(folder)])
+
+
+#: Arguments of the wrong kind for any facade parameter.
+WRONG = st.one_of(JUNK, st.sampled_from([GRAPH, PROGRAM, NETWORK, X, b"bytes", 3.5, object(),
+                                         print, Path("/nonexistent/x")]))
+
+
+#: A valid call of each facade function (its positional arguments).
+VALID = {"load": ["ok"], "load_program": ["ok"], "save": [PROGRAM, "facade"],
+         "save_program": [PROGRAM, "facade"], "run_program": [PROGRAM, X],
+         "simulate": [NETWORK, {PORT: X["a"]}], "evaluate": [GRAPH, X],
+         "check_accuracy": [PROGRAM, X], "compile_graph": [GRAPH]}
+
+
+@budget(0.25)
+@given(st.sampled_from(sorted(VALID)), st.data(), st.one_of(st.none(), WRONG))
+def test_facade_argument_types(folder, name, data, progress) -> None:
+    import radarsnn
+
+    args = [folder / v if isinstance(v, str) else v for v in VALID[name]]
+    for i in data.draw(st.lists(st.integers(0, len(args) - 1), min_size=1, max_size=2)):
+        args[i] = data.draw(WRONG)  # one or two arguments of the wrong kind
+    note(f"{name}{tuple(type(a).__name__ for a in args)} progress={type(progress).__name__}")
+    fn = getattr(radarsnn, name)
+    kwargs = {"progress": progress} if name in ("run_program", "compile_graph") else {}
+    culprits = [name, "directory", "program", "graph", "inputs", "progress", "network",
+                "target", "chain", "argument", "Graph", "CompiledProgram", "SpikingNetwork",
+                "mapping", "path", "api", "'a'", "'o'", "save", "simulate", "calibration",
+                "input", "option", "artifact", "nonexistent", str(folder), PORT]
+
+    def call():
+        with warnings.catch_warnings(), contextlib.chdir(folder):  # a relative junk path too
+            warnings.simplefilter("ignore")
+            fn(*args, **kwargs)
+
+    outcome(call, culprits)
