@@ -51,6 +51,7 @@ __all__ = [
     "chirp_range_bins",
     "seed003_scene",
     "simulate_frame",
+    "simulate_frames",
     "target_amplitude_dbfs",
 ]
 
@@ -289,3 +290,30 @@ def simulate_frame(config: RadarConfig, scene: Scene, *, seed: int,
     adc.flags.writeable = False
     return Frame(adc=adc, truth=_truth(config, scene, n_angle_bins), config=config,
                  scene=scene, seed=int(seed), n_angle_bins=n_angle_bins, n_clipped=n_clipped)
+
+
+def simulate_frames(config: RadarConfig, scene: Scene, seeds) -> np.ndarray:
+    """The ADC cubes of one frame per seed, on a leading frames axis (a calibration set).
+
+    Parameters
+    ----------
+    config : RadarConfig
+    scene : Scene
+    seeds : iterable of int
+        One frame per seed (:func:`simulate_frame`).
+
+    Returns
+    -------
+    ndarray, shape ``(len(seeds), n_virtual, n_chirps, n_samples)``
+
+    Examples
+    --------
+    >>> from radar.config import preset
+    >>> from radar.scene_presets import carrada_scene
+    >>> simulate_frames(preset("carrada"), carrada_scene(), seeds=(1, 2)).shape
+    (2, 8, 64, 256)
+    """
+    cubes = [simulate_frame(config, scene, seed=int(s)).adc for s in seeds]
+    if not cubes:
+        raise RadarConfigError("simulate_frames needs at least one seed")
+    return np.stack(cubes)

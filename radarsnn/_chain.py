@@ -25,10 +25,10 @@ from __future__ import annotations
 from compiler.chains import range_chain, range_doppler_chain
 from ir.ops import CFAR, AdcInput, Add, Classifier, Cluster, Linear, Log, Sum, Threshold, Track
 from radar.config import PRESETS, RadarConfig, preset
-from radar.scene import SCENE_PRESETS, Scene, Target, simulate_frame
+from radar.scene import SCENE_PRESETS, Scene, Target, simulate_frame, simulate_frames
 
 __all__ = [
     "CFAR", "PRESETS", "SCENE_PRESETS", "Add", "AdcInput", "Classifier", "Cluster", "Linear",
     "Log", "RadarConfig", "Scene", "Sum", "Target", "Threshold", "Track", "preset",
-    "range_chain", "range_doppler_chain", "simulate_frame",
+    "range_chain", "range_doppler_chain", "simulate_frame", "simulate_frames",
 ]
