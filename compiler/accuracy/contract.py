@@ -11,7 +11,7 @@ figure               meaning                                                    
 ===================  ==========================================================  =========
 ``error_db``         RMS error over the noise cells relative to the noise floor  ≤ −10 dB
 ``lost``             fraction of signal cells (12 dB over the floor) > 6 dB off  ≤ 1 %
-``clipped``          fraction of the stage's encoded inputs clipped              ≤ 10⁻⁴
+``clipped``          fraction of a value stage's encoded inputs clipped          ≤ 10⁻⁴
 ``sensitivity``      detected cells kept, against the conventional mask          ≥ 0.97
 ``precision``        spiking detections that the conventional chain also has     ≥ 0.97
 ``missed``           conventional objects with no spiking detection within ±1    0
@@ -19,7 +19,9 @@ figure               meaning                                                    
 ===================  ==========================================================  =========
 
 A −10 dB error moves a CFAR's noise estimate by under 0.5 dB; a code that decodes the
-noise to 0 scores 0 dB. Errors of upstream stages carry into later ones, as on the
+noise to 0 scores 0 dB. A detector's clipped inputs are reported, not judged by
+themselves: a return above the top of its latency code (leakage) fires first either way,
+and what clipping costs shows in the decisions and objects. Errors of upstream stages carry into later ones, as on the
 chip, so the *first* stage that breaks its contract (in program order) is the one
 named.
 
@@ -81,9 +83,9 @@ class StageCheck:
     def failures(self, tol: Tolerances) -> list[str]:
         """One phrase per figure beyond its tolerance (empty: the stage holds)."""
         f, out = self.figures, []
-        if self.clipped > tol.clipped_max:
-            out.append(f"clipped {self.clipped:.2e} of its inputs > {tol.clipped_max:g}")
-        if self.kind == "values":
+        if self.kind == "values":  # a detector's clipped inputs show in its decisions
+            if self.clipped > tol.clipped_max:
+                out.append(f"clipped {self.clipped:.2e} of its inputs > {tol.clipped_max:g}")
             if f["error_db"] > tol.error_db_max:
                 out.append(f"error {f['error_db']:+.1f} dB re noise > {tol.error_db_max:g} dB")
             if f["lost"] > tol.lost_max:
