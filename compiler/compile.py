@@ -91,10 +91,10 @@ def motif_settings(options: Mapping[str, Any]) -> dict[type[BaseModel], BaseMode
     (64, 'exact')
     >>> motif_settings({})[RateOptions].time_steps, motif_settings({})[CfarOptions].time_steps
     (2000, 100)
-    >>> motif_settings({"charging": "often"})
+    >>> motif_settings({"cfar_ties": "often"})
     Traceback (most recent call last):
     ...
-    ir.errors.CompileError: compile option charging='often' must be auto, constant or companding
+    ir.errors.CompileError: compile option cfar_ties='often' must be balanced or exact
 
     Raises
     ------

@@ -155,7 +155,7 @@ def compact_node(proj: Any, src: Population, tgt: Population, max_weights: int
         return nir.Linear(weight=np.ascontiguousarray(weights.T)), (
             f"the shared {n_out} x {n_in} block of {reps} repetitions as one Linear: NIR "
             "has no repeated Linear (radarsnn_entry names the axes)")
-    what = "sparse matrix" if weights is None and proj.kind == "matrix" else proj.kind
+    what = type(proj).__name__  # MatrixProjection (sparse here) or StencilProjection
     return nir.Linear(weight=np.zeros((0, 0))), (
         f"a {what} over {src.size} -> {tgt.size} neurons has no NIR node short of a dense "
         f"Linear over max_weights={max_weights}: an empty Linear, weights in metadata")

@@ -21,9 +21,9 @@ figure               meaning                                                    
 A −10 dB error moves a CFAR's noise estimate by under 0.5 dB; a code that decodes the
 noise to 0 scores 0 dB. A detector's clipped inputs are reported, not judged by
 themselves: a return above the top of its latency code (leakage) fires first either way,
-and what clipping costs shows in the decisions and objects. Errors of upstream stages carry into later ones, as on the
-chip, so the *first* stage that breaks its contract (in program order) is the one
-named.
+and what clipping costs shows in the decisions and objects. Errors of upstream stages
+carry into later ones, as on the chip, so the *first* stage that breaks its contract (in
+program order) is the one named.
 
 Examples
 --------

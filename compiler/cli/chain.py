@@ -197,8 +197,12 @@ def compile_chain(chain: str | Path, target: str | None, *,
     return program, note, inputs
 
 
-def _compile(args: argparse.Namespace, target: str | None):
-    """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note)."""
+def _compile(args: argparse.Namespace, target: str | None, *, measured: bool = False):
+    """Compile ``args.chain`` as the ``compile`` and ``report`` commands do; (program, note).
+
+    ``measured``: without ``--accuracy``, measure the accuracy contract when calibration
+    data is given (``compile``); ``report`` and ``export-nir`` compile unmeasured unless
+    ``--accuracy`` asks."""
     options = parse_options(getattr(args, "option", None))
     motifs = {}
     for m in args.motif or []:
@@ -208,7 +212,8 @@ def _compile(args: argparse.Namespace, target: str | None):
         motifs[key] = value
     if getattr(args, "repetitions", None):
         options["repetitions"] = args.repetitions
-    accuracy = args.accuracy or ("error" if args.calibration else "off")
+    accuracy = getattr(args, "accuracy", None) or (
+        "error" if measured and args.calibration else "off")
     program, note, inputs = compile_chain(args.chain, target, calibration=args.calibration,
                                           bin_layout=getattr(args, "bin_layout", None),
                                           motifs=motifs, time_steps=args.time_steps,
@@ -249,7 +254,7 @@ def _cmd_compile(args: argparse.Namespace) -> int:
     from backends import save_program
     from compiler.report.render import totals_line
 
-    program, note = _compile(args, args.target)
+    program, note = _compile(args, args.target, measured=True)
     folder = save_program(program, args.output, extra={
         "chain_file": str(args.chain), "calibration": note,
         "accuracy": program.records.accuracy.to_dict()})
@@ -356,9 +361,9 @@ def _compile_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--accuracy", choices=["error", "warn", "off"],
                    help="measure every spiking stage on held-back calibration frames and "
                         "choose the motifs that keep the conventional chain's detections "
-                        "(docs/accuracy.md): refuse a chain that loses them (error, the "
-                        "default with -c), keep the best and warn (warn), or skip it (off, "
-                        "the default on synthetic noise)")
+                        "(docs/accuracy.md): refuse a chain that loses them (error: compile's "
+                        "default with -c), keep the best and warn (warn), or skip it (off: "
+                        "the default on synthetic noise and of report)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
 
