@@ -35,9 +35,9 @@ carrada 0.976 / 0.994 → 0.993 / 0.995 (``docs/chip_accuracy.md``).
 A chain with no Doppler DFT (a chirp sequence: range DFT, magnitude, CFAR per chirp)
 repeats the same leakage over its chirps too: the last linear stage before a magnitude on
 the host that leads to a CFAR is split along ``chirp`` the same way, its static part
-being its value on the chirp mean, repeated (``<node>__static``, ``C × 1`` of ones); measured on 16 chirps with leakage 40 dB
-over a weak target, loihi2, calibrated on other frames: 176 → 274 of 275 cells kept
-(``tests/test_static_split.py``).
+being its value on the chirp mean, repeated (``<node>__static``, ``C × 1`` of ones);
+measured on 16 chirps with leakage 40 dB over a weak target, loihi2, calibrated on other
+frames: 176 → 274 of 275 cells kept (``tests/test_static_split.py``).
 
 ``records["static-split"]``: per split, the Doppler node, the input, the chirp axis
 and the ids of the nodes added.
