@@ -174,7 +174,13 @@ def _check_dynamics(graph: nir.NIRGraph, nets: list[SpikingNetwork], where: str,
     except (TypeError, ValueError):
         raise ArtifactError(f"{where}: radarsnn_dt_s and radarsnn_max_weights must be "
                             "numbers") from None
-    again, _ = _export(nets, [], dt_s, max_weights, name=nets[0].name if nets else "")
+    if not (np.isfinite(dt_s) and dt_s > 0):  # the export would refuse it, naming no file
+        raise ArtifactError(f"{where}: radarsnn_dt_s must be a positive number of seconds, "
+                            f"got {dt_s!r}")
+    try:
+        again, _ = _export(nets, [], dt_s, max_weights, name=nets[0].name if nets else "")
+    except ArtifactError as exc:
+        raise ArtifactError(f"{where}: {exc}") from None
     edited = "was edited after export; strip its radarsnn metadata to import it as a NIR graph"
     if set(again.nodes) != set(graph.nodes) or sorted(again.edges) != sorted(
             tuple(e) for e in graph.edges):
