@@ -15,7 +15,7 @@ figure               meaning                                                    
 ``sensitivity``      detected cells kept, against the conventional mask          ≥ 0.97
 ``precision``        spiking detections that the conventional chain also has     ≥ 0.97
 ``missed``           conventional objects with no spiking detection within ±1    0
-``extra_per_frame``  spiking objects with no conventional detection within ±1    ≤ 1
+``extra_per_map``  spiking objects with no conventional detection within ±1    ≤ 1
 ===================  ==========================================================  =========
 
 A −10 dB error moves a CFAR's noise estimate by under 0.5 dB; a code that decodes the
@@ -28,11 +28,11 @@ program order) is the one named.
 Examples
 --------
 >>> t = Tolerances()
->>> t.error_db_max, t.sensitivity_min, t.extra_per_frame_max
+>>> t.error_db_max, t.sensitivity_min, t.extra_per_map_max
 (-10.0, 0.97, 1.0)
 >>> s = StageCheck(node="det", motif="time", kind="decisions",
 ...                figures={"sensitivity": 0.9, "precision": 1.0, "missed": 2,
-...                         "extra_per_frame": 0.0, "objects": 12},
+...                         "extra_per_map": 0.0, "objects": 12},
 ...                clipped=0.0)
 >>> s.failures(t)
 ['sensitivity 0.900 < 0.97', 'missed 2 of 12 objects > 0']
@@ -66,7 +66,7 @@ class Tolerances(BaseModel):
     sensitivity_min: float = Field(0.97, ge=0, le=1, description="cell sensitivity")
     precision_min: float = Field(0.97, ge=0, le=1, description="cell precision")
     missed_max: int = Field(0, ge=0, description="conventional objects lost")
-    extra_per_frame_max: float = Field(1.0, ge=0, description="extra objects per frame")
+    extra_per_map_max: float = Field(1.0, ge=0, description="extra objects per map")
 
 
 @dataclass(frozen=True)
@@ -98,9 +98,9 @@ class StageCheck:
             out.append(f"precision {f['precision']:.3f} < {tol.precision_min:g}")
         if f["missed"] > tol.missed_max:
             out.append(f"missed {f['missed']} of {f['objects']} objects > {tol.missed_max}")
-        if f["extra_per_frame"] > tol.extra_per_frame_max:
-            out.append(f"{f['extra_per_frame']:.1f} extra objects per frame > "
-                       f"{tol.extra_per_frame_max:g}")
+        if f["extra_per_map"] > tol.extra_per_map_max:
+            out.append(f"{f['extra_per_map']:.1f} extra objects per map > "
+                       f"{tol.extra_per_map_max:g}")
         return out
 
     def describe(self) -> str:
@@ -113,7 +113,7 @@ class StageCheck:
         else:
             body = (f"sensitivity {f['sensitivity']:.3f}, precision {f['precision']:.3f}, "
                     f"objects kept {f['kept']}/{f['objects']}, "
-                    f"{f['extra_per_frame']:.2f} extra per frame")
+                    f"{f['extra_per_map']:.2f} extra per map")
         return f"{self.node} [{self.motif}]{via}: {body}, clipped {self.clipped:.1e}"
 
     def to_dict(self) -> dict:

@@ -95,6 +95,7 @@ class DecisionFigures:
     kept: int
     extra: int
     frames: int
+    maps: int = 0
 
     @property
     def missed(self) -> int:
@@ -102,13 +103,14 @@ class DecisionFigures:
         return self.objects - self.kept
 
     @property
-    def extra_per_frame(self) -> float:
-        """Extra objects per frame."""
-        return self.extra / max(self.frames, 1)
+    def extra_per_map(self) -> float:
+        """Extra objects per detection map (a frame's map, or each map of a batch axis: the
+        range profile of every chirp of a chirp sequence)."""
+        return self.extra / max(self.maps, 1)
 
     def to_dict(self) -> dict:
-        """JSON-able figures (with ``missed`` and ``extra_per_frame``)."""
-        return {**self.__dict__, "missed": self.missed, "extra_per_frame": self.extra_per_frame}
+        """JSON-able figures (with ``missed`` and ``extra_per_map``)."""
+        return {**self.__dict__, "missed": self.missed, "extra_per_map": self.extra_per_map}
 
 
 def value_figures(got: np.ndarray, want: np.ndarray) -> ValueFigures:
@@ -175,7 +177,8 @@ def decision_figures(got: np.ndarray, want: np.ndarray, power: np.ndarray, *,
     axes : sequence of int
         The axes the detector's window spans (other axes are a batch).
     frames : int
-        How many frames the arrays hold (for ``extra_per_frame``).
+        How many frames the arrays hold (recorded; ``extra_per_map`` divides by the maps:
+        the product of the axes the window does not span, frames included).
     firm : ndarray of bool, optional
         The conventional detections that hold with a margin (e.g. with the threshold
         raised by 1 dB): only these count as objects to keep; a conventional detection
@@ -195,8 +198,9 @@ def decision_figures(got: np.ndarray, want: np.ndarray, power: np.ndarray, *,
     got_objects = _peaks(got, power, axes)
     kept = int(np.sum(want_objects & _near(got, axes)))
     extra = int(np.sum(got_objects & ~_near(want, axes)))
+    batch = [n for a, n in enumerate(want.shape) if a not in axes]
     return DecisionFigures(
         sensitivity=hits / n_want if n_want else 1.0,
         precision=hits / n_got if n_got else 1.0,
         cells=n_want, spiking_cells=n_got, objects=int(want_objects.sum()), kept=kept,
-        extra=extra, frames=frames)
+        extra=extra, frames=frames, maps=int(np.prod(batch, dtype=np.int64)))

@@ -107,10 +107,10 @@ def _accuracy_lines(acc: dict, selection: dict | None) -> list[str]:
                      "error_dB_re_noise": f.get("error_db"), "lost": f.get("lost"),
                      "sensitivity": f.get("sensitivity"), "precision": f.get("precision"),
                      "objects_kept": f"{f['kept']}/{f['objects']}" if "kept" in f else None,
-                     "extra_per_frame": f.get("extra_per_frame"), "clipped": s["clipped"],
+                     "extra_per_map": f.get("extra_per_map"), "clipped": s["clipped"],
                      "failures": "; ".join(s["failures"]) or "—"})
     lines += _table(rows, ("node", "motif", "kind", "error_dB_re_noise", "lost", "sensitivity",
-                           "precision", "objects_kept", "extra_per_frame", "clipped",
+                           "precision", "objects_kept", "extra_per_map", "clipped",
                            "failures"))
     if selection:
         lines += ["", "Configurations tried (`motifs=\"auto\"`):", ""]
