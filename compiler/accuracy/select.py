@@ -75,13 +75,13 @@ class Ladder:
     def config(self, rungs: Sequence[int]) -> tuple[dict[str, str], dict[str, Any]]:
         """Motifs by op name and the merged options of the chosen rungs (larger wins)."""
         motifs: dict[str, str] = {}
-        options: dict[str, Any] = {}
+        merged: dict[str, Any] = {}
         for op, rung in zip(self.ops, rungs, strict=True):
             cand = LADDERS[op][rung]
             motifs[op] = cand.motif
             for k, v in cand.options:
-                options[k] = v if isinstance(v, str) else max(options.get(k, v), v)
-        return motifs, options
+                merged[k] = v if isinstance(v, str) or k not in merged else max(merged[k], v)
+        return motifs, merged
 
 
 @dataclass
