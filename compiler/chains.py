@@ -48,6 +48,18 @@ RANGE_CFAR: dict[str, Any] = {
 }
 
 
+def _range_front(config: RadarConfig, shape: dict[str, int], window: str) -> list[dict]:
+    """The nodes every chain starts with: ADC cube ``adc`` → window ``win`` → range DFT ``rng``
+    (all bins for IQ sampling, the positive half for real sampling)."""
+    return [
+        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
+         "full_scale": float(config.full_scale_code)},
+        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
+        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
+         "keep": "all" if config.iq else "positive"},
+    ]
+
+
 def range_doppler_chain(config: RadarConfig, *, window: str = "hann",
                         doppler_window: str | None = "hann", magnitude: str = "square",
                         cfar: dict[str, Any] | None = None, name: str | None = None) -> Graph:
@@ -79,11 +91,7 @@ def range_doppler_chain(config: RadarConfig, *, window: str = "hann",
     """
     shape = {"rx": config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
     nodes = [
-        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
-         "full_scale": float(config.full_scale_code)},
-        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
-        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
-         "keep": "all" if config.iq else "positive"},
+        *_range_front(config, shape, window),
         *([{"id": "dwin", "op": "window", "input": "rng", "axis": "chirp",
              "kind": doppler_window}] if doppler_window else []),
         {"id": "dop", "op": "dft", "input": "dwin" if doppler_window else "rng", "axis": "chirp",
@@ -126,11 +134,7 @@ def range_chain(config: RadarConfig, *, window: str = "hann", rx: int | None = N
     """
     shape = {"rx": rx or config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
     nodes = [
-        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
-         "full_scale": float(config.full_scale_code)},
-        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
-        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
-         "keep": "all" if config.iq else "positive"},
+        *_range_front(config, shape, window),
         {"id": "out", "op": "output", "input": "rng"},
     ]
     graph = Graph.from_dict({"name": name or f"{config.name}-range", "nodes": nodes})
@@ -170,11 +174,7 @@ def range_cfar_chain(config: RadarConfig, *, window: str = "hann",
     """
     shape = {"rx": config.n_virtual, "chirp": config.n_chirps, "sample": config.n_samples}
     nodes = [
-        {"id": "adc", "op": "adc_input", "shape": shape, "complex": bool(config.iq),
-         "full_scale": float(config.full_scale_code)},
-        {"id": "win", "op": "window", "input": "adc", "axis": "sample", "kind": window},
-        {"id": "rng", "op": "dft", "input": "win", "axis": "sample", "out_axis": "range",
-         "keep": "all" if config.iq else "positive"},
+        *_range_front(config, shape, window),
         {"id": "mag", "op": "magnitude", "input": "rng", "kind": "square"},
         {"id": "rp", "op": "sum", "input": "mag", "axis": "rx"},
         {"id": "det", "op": "cfar", "input": "rp", **(cfar or RANGE_CFAR)},

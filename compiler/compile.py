@@ -325,10 +325,9 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
                            "check_inputs (or accuracy='off' to compile unmeasured)")
 
     def build(auto_motifs: dict[str, str], auto_options: dict[str, Any]) -> CompiledProgram:
-        steps = time_steps if time_steps is not None else auto_options.pop("time_steps", None)
-        auto_options.pop("time_steps", None)
+        # the user's motifs and options win over the rungs'
         return _compile_once(graph, motifs={**auto_motifs, **motifs}, calibration_inputs=fit,
-                             time_steps=steps, weight_bits=weight_bits,
+                             time_steps=time_steps, weight_bits=weight_bits,
                              options={**auto_options, **options}, **once)
 
     def measure(program: CompiledProgram):
