@@ -50,6 +50,7 @@ from compiler.passes.report import ReportPass
 from compiler.passes.split import Split
 from compiler.passes.static_split import StaticSplit, StaticSplitOptions
 from compiler.program import CompiledProgram
+from compiler.report import add_measured_activity
 from ir import Graph
 from ir.errors import CompileError, IRError
 from ir.frames import n_frames
@@ -330,15 +331,23 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
                              time_steps=time_steps, weight_bits=weight_bits,
                              options={**auto_options, **options}, **once)
 
+    runs: list[tuple[CompiledProgram, Any]] = []  # each program measured, with its run
+
     def measure(program: CompiledProgram):
+        run = simulator.run(program, check)
+        runs.append((program, run))
         return check_program(program, check, simulator, tolerances=tolerances,
-                             held_out=held_out, note=note)
+                             held_out=held_out, note=note, run=run)
 
     program, selection = search(ops_to_search(graph, motifs), build, measure,
                                 accuracy=accuracy)
     chosen = selection.attempts[selection.chosen]
     program.records.accuracy = chosen.contract
     program.records.extra["motif_selection"] = selection.to_dict()
+    run = next((r for p, r in runs if p is program), None)
+    if program.records.report is not None and getattr(run, "simulations", ()):
+        # the energy per frame on the spikes counted on the held-back frames
+        add_measured_activity(program.records.report, program, run.simulations)
     if program.records.report is not None:  # shown per stage in the report
         program.records.report.data["accuracy"] = chosen.contract.to_dict()
         program.records.report.data["motif_selection"] = selection.to_dict()

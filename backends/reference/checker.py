@@ -44,4 +44,5 @@ class ReferenceSimulator:
         """Every node's value and the clipped counts per encoder port."""
         res = run_program(program, inputs, mode=self.mode, out_of_range="clip",
                           max_time_s=self.max_time_s)
-        return SimulatedFrames(values=res.values, clipped=res.clipped)
+        return SimulatedFrames(values=res.values, clipped=res.clipped,
+                               simulations=tuple(res.simulations))

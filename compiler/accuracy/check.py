@@ -27,7 +27,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from compiler.accuracy.contract import Contract, Tolerances, measure_contract
-from compiler.accuracy.simulator import Simulator
+from compiler.accuracy.simulator import SimulatedFrames, Simulator
 from ir.frames import n_frames
 from ir.interpreter import evaluate
 
@@ -36,7 +36,7 @@ __all__ = ["check_program"]
 
 def check_program(program, inputs: Mapping[str, np.ndarray], simulator: Simulator, *,
                   tolerances: Tolerances | None = None, held_out: bool = True,
-                  note: str = "") -> Contract:
+                  note: str = "", run: SimulatedFrames | None = None) -> Contract:
     """The contract of ``program`` measured by ``simulator`` on ``inputs`` against the golden chain.
 
     Parameters
@@ -51,6 +51,9 @@ def check_program(program, inputs: Mapping[str, np.ndarray], simulator: Simulato
         The contract.
     held_out, note : bool, str
         Whether the frames were held back from calibration; a remark for the summary.
+    run : SimulatedFrames, optional
+        ``simulator.run(program, inputs)`` when the caller already ran it (to keep its
+        spike counts); default: run it here.
 
     Returns
     -------
@@ -58,7 +61,7 @@ def check_program(program, inputs: Mapping[str, np.ndarray], simulator: Simulato
     """
     graph = program.graph
     count = n_frames(graph.infer_types(), inputs, f"program {graph.name!r}") or 1
-    run = simulator.run(program, inputs)
+    run = simulator.run(program, inputs) if run is None else run
     reference = evaluate(graph, inputs, registry=program.evaluators)
     return measure_contract(program, run.values, reference, run.clipped, n_frames=count,
                             tolerances=tolerances, held_out=held_out, note=note)

@@ -19,7 +19,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -30,10 +30,16 @@ __all__ = ["SimulatedFrames", "Simulator"]
 
 @dataclass(frozen=True)
 class SimulatedFrames:
-    """Every node's value on the frames run, and the values clipped per encoder port."""
+    """Every node's value on the frames run, and the values clipped per encoder port.
+
+    ``simulations`` (optional): one result per spiking segment with ``spike_counts``,
+    ``synaptic_events`` (per population / projection, summed over the frames) and
+    ``n_frames``; the resource report's energy then rests on measured counts.
+    """
 
     values: Mapping[str, np.ndarray]
     clipped: Mapping[str, int] = field(default_factory=dict)
+    simulations: Sequence[Any] = ()
 
 
 @runtime_checkable

@@ -276,6 +276,8 @@ def _cmd_compile(args: argparse.Namespace) -> int:
             print("  " + totals_line(totals))
         if report is not None:
             print("  " + report.latency_line())
+            if report.energy_line():
+                print("  " + report.energy_line())
         contract = program.records.accuracy
         if hasattr(contract, "lines"):  # measured: the accuracy contract per stage
             print("\n".join(f"  {line}" for line in contract.lines()))

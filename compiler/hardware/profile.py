@@ -49,13 +49,14 @@ from pydantic import (
     model_serializer,
 )
 
+from compiler.hardware.figures import EnergyFigures
 from ir.errors import CompileError
 from ir.model import short_repr
 from ir.parsing import load_yaml
 from ir.serialize import describe_yaml_error
 
-__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "REQUIRED_FIELDS",
-           "HardwareProfile", "load_profile"]
+__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "OPTIONAL_FIELDS",
+           "REQUIRED_FIELDS", "HardwareProfile", "load_profile"]
 
 #: The per-core budgets, in the column order of every demand array.
 BUDGETS: tuple[str, ...] = ("neurons", "input_axons", "output_axons", "synapse_bits")
@@ -70,6 +71,10 @@ BUILTIN_BOARDS: tuple[str, ...] = ("kapoho_point", "nahuku32", "spinnaker2_48", 
 #: single-chip profile serialises as before they existed.
 BOARD_FIELDS: tuple[str, ...] = ("chip_profile", "inter_chip_bandwidth_bit_s",
                                  "inter_chip_latency_s", "spike_message_bits")
+
+#: Optional fields a profile file may leave out (``None``), also left out of the serialised
+#: profile when unset: the board fields and the energy constants.
+OPTIONAL_FIELDS: tuple[str, ...] = (*BOARD_FIELDS, "energy")
 
 _Int = Annotated[int, Strict()]  # not True, not 1.0: a count is an integer
 _Count = _Int | None
@@ -129,6 +134,9 @@ class HardwareProfile(BaseModel):
         Delay a time step gains when its spikes cross a chip boundary, s.
     spike_message_bits : int or None
         Bits of one spike message on a chip-to-chip link.
+    energy : EnergyFigures or None
+        Energy per synaptic event, neuron update and spike, and static power, each with
+        its source (:mod:`compiler.hardware.figures`; ``None``: no energy estimate).
     description : str
         Where the figures come from.
     """
@@ -161,6 +169,7 @@ class HardwareProfile(BaseModel):
     inter_chip_bandwidth_bit_s: float | None = Field(default=None, gt=0)
     inter_chip_latency_s: float | None = Field(default=None, ge=0)
     spike_message_bits: _Count = Field(default=None, ge=1, le=1024)
+    energy: EnergyFigures | None = None
     description: str = ""
 
     @field_validator("time_step_s", "inter_chip_bandwidth_bit_s", "inter_chip_latency_s",
@@ -173,9 +182,9 @@ class HardwareProfile(BaseModel):
         return value
 
     @model_serializer(mode="wrap")
-    def _without_unset_board_fields(self, handler):
+    def _without_unset_optional_fields(self, handler):
         data = handler(self)
-        for key in BOARD_FIELDS:
+        for key in OPTIONAL_FIELDS:
             if data.get(key) is None:
                 data.pop(key, None)
         return data
@@ -222,9 +231,10 @@ class HardwareProfile(BaseModel):
 
 
 #: Fields a chip profile file must give (``null`` where unbounded) unless it says
-#: ``unbounded: true``: every field but the name, the description and the board fields.
+#: ``unbounded: true``: every field but the name, the description and the optional fields.
 REQUIRED_FIELDS: tuple[str, ...] = tuple(
-    k for k in HardwareProfile.model_fields if k not in ("name", "description", *BOARD_FIELDS))
+    k for k in HardwareProfile.model_fields if k not in ("name", "description",
+                                                         *OPTIONAL_FIELDS))
 
 
 def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile:

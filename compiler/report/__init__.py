@@ -2,8 +2,9 @@
 
 :func:`build_report` gathers :mod:`~compiler.report.stages` (Table 3 bottom),
 :mod:`~compiler.report.frame_io` (Table 3 top), :mod:`~compiler.report.opcounts`
-(Table 1), the host/spiking :mod:`~compiler.report.boundaries`, latency and the placement
-into a :class:`~compiler.report.render.Report` (``to_json``, ``to_markdown``,
+(Table 1), the host/spiking :mod:`~compiler.report.boundaries`, latency, the
+:mod:`~compiler.report.energy` per frame (beside the :mod:`~compiler.report.conventional`
+DSP) and the placement into a :class:`~compiler.report.render.Report` (``to_json``, ``to_markdown``,
 ``save_core_map``).  See ``docs/report.md``.
 """
 
@@ -14,13 +15,15 @@ from collections.abc import Sequence
 from compiler.hardware import BUDGETS, load_profile
 from compiler.report.boundaries import boundary_rows
 from compiler.report.chips import chip_rows
+from compiler.report.conventional import conventional_rows
+from compiler.report.energy import energy_section
 from compiler.report.formats import format_rows
 from compiler.report.frame_io import frame_io
 from compiler.report.opcounts import graph_cfar_op_counts
 from compiler.report.render import Report
-from compiler.report.stages import stage_rows
+from compiler.report.stages import measured_rows, stage_rows
 
-__all__ = ["Report", "build_report", "network_runs"]
+__all__ = ["Report", "add_measured_activity", "build_report", "network_runs"]
 
 SCHEMA = "radarsnn-report/1"
 
@@ -155,6 +158,7 @@ def build_report(program, *, sim_results: Sequence | None = None,
         "totals": totals,
         "formats": format_rows(program),
     }
+    data["energy"] = _energy(data, program, profile)
     if placement is not None and getattr(placement, "chip_messages", None) is not None:
         # a multi-chip board: the per-chip table and the inter-chip traffic (single chip: none)
         data["chips"], data["inter_chip"] = chip_rows(placement, profile, rate, lat_rows)
@@ -163,3 +167,39 @@ def build_report(program, *, sim_results: Sequence | None = None,
             data["inter_chip"]["latency_with_inter_chip_s"] = total_s + added
             data["inter_chip"]["fits"] = total_s + added <= 1.0 / rate
     return Report(data)
+
+
+def _energy(data: dict, program, profile) -> dict:
+    placement = program.records.placement
+    return energy_section(
+        data["stages"], profile, latency_s=data["latency"]["total_s"],
+        n_chips=placement.n_chips if placement is not None else 1,
+        conventional=conventional_rows(program.graph, [r["node"] for r in data["stages"]]))
+
+
+def add_measured_activity(report: Report, program, sim_results: Sequence) -> None:
+    """Fill ``report``'s measured spikes and synaptic events, and its energy, from simulations.
+
+    For a report built before the program was simulated (the measured compile runs the
+    held-back frames after the ``report`` pass): each stage row gains
+    ``spikes_measured`` and ``synaptic_events_measured`` (means per frame) and the
+    ``energy`` entry is recomputed on them (``basis: measured``).
+
+    Parameters
+    ----------
+    report : Report
+        ``program.records.report``.
+    program : CompiledProgram
+        The program simulated.
+    sim_results : sequence of SimResult
+        One per network (spiking segment), in order; another count changes nothing.
+    """
+    networks = program.networks
+    if len(sim_results) != len(networks) or not networks:
+        return
+    for net, sim in zip(networks, sim_results, strict=True):
+        fields = measured_rows(net, sim)
+        for row in report.data["stages"]:
+            if row["network"] == net.name and row["node"] in fields:
+                row.update(fields[row["node"]])
+    report.data["energy"] = _energy(report.data, program, load_profile(program.target))

@@ -12,6 +12,10 @@ JSON schema (``schema: "radarsnn-report/1"``; see ``docs/report.md``)::
     cfar_ops[]    node, n_train, algorithm, add, cmp, total[, n_steps]
     latency       networks[] (network, time_steps, runs, latency_steps, step_s, latency_s);
                   total_steps, total_s, frame_period_s, fits, max_step_s, step_note
+    energy        stages[] (node, network, basis, synaptic_events, neuron_updates, spikes,
+                  synaptic_J, neuron_J, spike_J, energy_J, latency_s, dsp_cycles, dsp_J,
+                  dsp_latency_s); dynamic_J, static_J, total_J, chips, dsp_J, dsp_latency_s,
+                  dynamic_to_dsp, total_to_dsp, basis, constants[] (name, value, source), note
     cores[]       core, chip, stage (the first placed), stages (all, in placement order),
                   neurons, input_axons, output_axons, synapse_bits, utilisation
     traffic       host_input, inter_core, inter_chip, buffered (messages per frame), basis
@@ -32,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TOTALS_HEADERS", "Report", "latency_line", "totals_line"]
+__all__ = ["TOTALS_HEADERS", "Report", "energy_line", "latency_line", "totals_line"]
 
 #: How the Markdown and the summaries name the totals whose keys alone would be ambiguous.
 TOTALS_HEADERS = {"synapses": "synapse_instances", "synapses_stored": "synapses_stored"}
@@ -154,6 +158,67 @@ def latency_line(latency: dict) -> str:
             f"frame period of {period:g} s: {fit}")
 
 
+def _joules(v: float | None) -> str:
+    """An energy with an SI prefix, 4 significant digits (``None``: not published)."""
+    if v is None:
+        return "not published"
+    for scale, unit in ((1.0, "J"), (1e-3, "mJ"), (1e-6, "µJ"), (1e-9, "nJ")):
+        if abs(v) >= scale:
+            return f"{v / scale:.4g} {unit}"
+    return f"{v / 1e-12:.4g} pJ"
+
+
+def energy_line(energy: dict, target: str) -> str:
+    """One line: the chip's energy per frame on ``target`` and the DSP's beside it.
+
+    ``energy`` is a report's ``energy`` entry (the module docstring's schema).
+
+    Examples
+    --------
+    >>> print(energy_line({"total_J": 1.06, "dynamic_J": 0.04, "static_J": 1.02,
+    ...                    "dsp_J": 0.0049, "total_to_dsp": 216.3, "basis": "bound"},
+    ...                   "loihi"))  # doctest: +NORMALIZE_WHITESPACE
+    energy ≈ 1.06 J/frame on loihi (dynamic 40 mJ + static 1.02 J; bound counts);
+    conventional DSP (C674x) ≈ 4.9 mJ/frame, chip/DSP = 216
+    >>> print(energy_line({"total_J": None, "dynamic_J": None, "static_J": None,
+    ...                    "dsp_J": 0.0049, "total_to_dsp": None, "basis": "bound"},
+    ...                   "loihi2"))  # doctest: +NORMALIZE_WHITESPACE
+    energy per frame on loihi2: not published (no per-operation figures);
+    conventional DSP (C674x) ≈ 4.9 mJ/frame
+    """
+    dsp = f"conventional DSP (C674x) ≈ {_joules(energy['dsp_J'])}/frame"
+    if energy["dynamic_J"] is None:
+        return (f"energy per frame on {target}: not published (no per-operation figures); "
+                + dsp)
+    if energy["total_J"] is None:
+        chip = f"dynamic {_joules(energy['dynamic_J'])}/frame on {target} (static not known"
+    else:
+        chip = (f"{_joules(energy['total_J'])}/frame on {target} (dynamic "
+                f"{_joules(energy['dynamic_J'])} + static {_joules(energy['static_J'])}")
+    ratio = energy.get("total_to_dsp") or energy.get("dynamic_to_dsp")
+    return (f"energy ≈ {chip}; {energy['basis']} counts); {dsp}"
+            + (f", chip/DSP = {ratio:.3g}" if ratio else ""))
+
+
+def _energy_lines(e: dict, target: str) -> list[str]:
+    """The report's section on energy and latency per frame, with every constant's source."""
+    lines = ["", "## Energy and latency per frame", "", energy_line(e, target) + ".", ""]
+    published = any(c["name"].startswith(f"{target}.") for c in e["constants"])
+    rows = [{**r, **{k: r[k] if r[k] is not None or not published else "not published"
+                     for k in ("synaptic_J", "neuron_J", "spike_J", "energy_J")}}
+            for r in e["stages"]]
+    lines += _table(rows, ("node", "basis", "synaptic_events", "neuron_updates", "spikes",
+                           "energy_J", "latency_s", "dsp_cycles", "dsp_J", "dsp_latency_s"))
+    lines += ["", f"Chip: dynamic {_joules(e['dynamic_J'])} + static "
+              f"{_joules(e['static_J'])} ({e['chips']} chip(s) x latency) = "
+              f"{_joules(e['total_J'])} per frame; DSP: {_joules(e['dsp_J'])} in "
+              f"{_fmt(e['dsp_latency_s'])} s per frame. Note: {e['note']}.", "",
+              "Constants (values in SI units: J, W, Hz, cycles; – = not published, or a formula "
+              "given in its source):", ""]
+    lines += _table(e["constants"], ("name", "value", "source"))
+    return lines
+
+
 @dataclass
 class Report:
     """A resource report; ``data`` follows the schema in the module docstring."""
@@ -167,6 +232,11 @@ class Report:
     def latency_line(self) -> str:
         """One line: latency per frame and frame period in seconds, and the fit."""
         return latency_line(self.data["latency"])
+
+    def energy_line(self) -> str | None:
+        """One line: energy per frame on the chip and on the DSP (None: no energy entry)."""
+        e = self.data.get("energy")
+        return None if e is None else energy_line(e, self.data["target"])
 
     def to_markdown(self) -> str:
         """The report as Markdown tables."""
@@ -202,6 +272,8 @@ class Report:
                      if lat.get("max_step_s") else "") + "."]
         if lat.get("step_note"):
             lines += ["", f"Note: {lat['step_note']}."]
+        if d.get("energy"):
+            lines += _energy_lines(d["energy"], d["target"])
         if d.get("accuracy"):
             lines += _accuracy_lines(d["accuracy"], d.get("motif_selection"))
         if d.get("formats"):

@@ -31,7 +31,7 @@ from compiler.hardware.repetition import projection_repetitions as repetitions
 from compiler.hardware.repetition import stages
 from compiler.snn import SpikingNetwork
 
-__all__ = ["stage_rows", "nominal_synapses", "repetitions"]
+__all__ = ["measured_rows", "stage_rows", "nominal_synapses", "repetitions"]
 
 
 def nominal_synapses(proj, pops) -> int:
@@ -118,9 +118,36 @@ def stage_rows(network: SpikingNetwork, *, split=None, placement=None, net_index
         if placement is not None:
             row["cores"] = len({c for p in neurons for c in placement.cores_of(net_index, p.id)})
         if sim is not None:
-            row["spikes_measured"] = sum(sim.spike_counts.get(p.id, 0) for p in neurons) \
-                / sim.n_frames
-            row["synaptic_events_measured"] = sum(sim.synaptic_events.get(q.id, 0)
-                                                  for q in projs) / sim.n_frames
+            row.update(_measured(neurons, projs, sim))
         rows.append(row)
     return rows
+
+
+def _measured(neurons, projs, sim) -> dict:
+    return {"spikes_measured": sum(sim.spike_counts.get(p.id, 0) for p in neurons)
+            / sim.n_frames,
+            "synaptic_events_measured": sum(sim.synaptic_events.get(q.id, 0) for q in projs)
+            / sim.n_frames}
+
+
+def measured_rows(network: SpikingNetwork, sim) -> dict[str, dict]:
+    """Per stage key, the measured spikes and synaptic events per frame of a simulation.
+
+    The ``spikes_measured`` and ``synaptic_events_measured`` fields of :func:`stage_rows`
+    (mean per frame over ``sim.n_frames``), for a report built before the simulation.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> from compiler.snn import Population, SpikingNetwork
+    >>> net = SpikingNetwork(name="m", n_steps=4, populations=[Population(id="y", shape={"o": 4})])
+    >>> measured_rows(net, SimpleNamespace(spike_counts={"y": 6}, synaptic_events={}, n_frames=3))
+    {'y': {'spikes_measured': 2.0, 'synaptic_events_measured': 0.0}}
+    """
+    pops = network.population
+    out = {}
+    for stage in stages(network):
+        ids = set(stage.populations)
+        projs = [q for q in network.projections if q.target in ids]
+        out[stage.key] = _measured([pops[pid] for pid in stage.populations], projs, sim)
+    return out
