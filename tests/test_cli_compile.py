@@ -88,6 +88,8 @@ def test_compile_json_summary(tmp_path, capsys):
     lat = doc["latency"]  # the real-time fit, in seconds
     assert lat["frame_period_s"] == pytest.approx(0.1) and isinstance(lat["fits"], bool)
     assert lat["total_s"] == pytest.approx(lat["total_steps"] * 1e-5)  # loihi2: 10 µs a step
+    energy = doc["energy"]  # loihi2: no per-operation figures; the DSP's stays
+    assert energy["total_J"] is None and energy["dsp_J"] > 0
 
 
 def test_compile_prints_latency_frame_period_and_fit_in_seconds(tmp_path, capsys):
@@ -96,6 +98,10 @@ def test_compile_prints_latency_frame_period_and_fit_in_seconds(tmp_path, capsys
     line = next(x for x in out.splitlines() if x.strip().startswith("latency "))
     assert re.fullmatch(r"  latency [\d.e+-]+ s per frame \([\d ]+ steps x 1e-05 s\) against a "
                         r"frame period of 0\.1 s: (fits|does NOT fit.*)", line), line
+    # loihi2 publishes no energy per operation: said, with the DSP figure beside it
+    line = next(x for x in out.splitlines() if x.strip().startswith("energy "))
+    assert re.fullmatch(r"  energy per frame on loihi2: not published \(no per-operation "
+                        r"figures\); conventional DSP \(C674x\) ≈ [\d.]+ [µm]J/frame", line), line
 
 
 def test_an_edited_program_artifact_is_refused(compiled, tmp_path):

@@ -266,6 +266,7 @@ def _cmd_compile(args: argparse.Namespace) -> int:
                           "target": program.target.name, "segments": segments,
                           "totals": totals,
                           "latency": _latency_summary(report),
+                          "energy": _energy_summary(report),
                           "accuracy": program.records.accuracy.to_dict()},
                          sort_keys=True, default=str))
         return 0
@@ -292,6 +293,15 @@ def _latency_summary(report) -> dict:
     lat = report.data["latency"]
     return {k: lat.get(k) for k in ("total_steps", "total_s", "frame_period_s", "fits",
                                     "max_step_s")}
+
+
+def _energy_summary(report) -> dict:
+    """The energy per frame of ``compile --json``: chip (J), DSP (J), their ratio, basis."""
+    energy = report.data.get("energy") if report is not None else None
+    if energy is None:
+        return {}
+    return {k: energy.get(k) for k in ("total_J", "dynamic_J", "static_J", "dsp_J",
+                                       "total_to_dsp", "basis")}
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
