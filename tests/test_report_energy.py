@@ -21,6 +21,7 @@ from compiler.report.conventional import DSP, conventional_rows, fft_cycles
 from compiler.snn import Encoder, LatencyCode, NeuronParams, Population, SpikingNetwork
 from compiler.snn.matrix_projection import MatrixProjection
 from ir import Graph
+from ir.errors import CompileError
 
 ROOT = Path(__file__).resolve().parents[1]
 CARRADA = ROOT / "examples" / "chains" / "carrada_rd_oscfar.yaml"
@@ -155,3 +156,17 @@ def test_os_cfar_stand_in_json_roundtrip_is_plain():
     assert s["neuron_updates"] == 512 * 100 and s["spikes"] == 512
     assert s["dsp_cycles"] == 64 * 256 * 177  # the chain's det node: the 64 x 256 map
     assert {c["name"] for c in e["constants"]} >= {"loihi.synaptic_op_j", "dsp.clock_hz"}
+
+
+def test_a_user_profile_gives_its_own_energy_figures(tmp_path):
+    f = tmp_path / "chip.yaml"
+    f.write_text("name: chip\nunbounded: true\ntime_step_s: 1.0e-6\nenergy:\n"
+                 "  synaptic_op_j: {value: 1.0e-12, source: 'assumption: a guess'}\n")
+    p = load_profile(f)
+    assert p.energy.synaptic_op_j.value == 1e-12 and p.energy.neuron_update_j is None
+    f.write_text("name: chip\nunbounded: true\nenergy:\n  per_op_j: {value: 1, source: x}\n")
+    with pytest.raises(CompileError, match="energy.per_op_j"):
+        load_profile(f)
+    f.write_text("name: chip\nunbounded: true\nenergy:\n  spike_j: {value: -1, source: x}\n")
+    with pytest.raises(CompileError, match="energy.spike_j.value"):
+        load_profile(f)

@@ -17,6 +17,10 @@ adds :math:`P_\mathrm{static} \cdot n_\mathrm{chips} \cdot t_\mathrm{frame}` for
 frame. A figure the profile leaves ``null`` makes the energy "not published", never 0.
 Beside it, the same nodes on a radar DSP (:mod:`compiler.report.conventional`).
 
+Each neuron is counted updated once per step of its own stage's runs (:math:`N T`; a
+time-multiplexed stage's :math:`R` instances :math:`R` times the instance's); a chip that
+also updates the neurons of a stage while another stage's instances run spends more.
+
 Examples
 --------
 >>> from compiler.hardware.figures import EnergyFigures, Figure
