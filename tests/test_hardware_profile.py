@@ -48,6 +48,9 @@ def test_every_builtin_field_has_a_source_comment(name):
     assert {ln.split(":")[0] for ln in fields} == set(HardwareProfile.model_fields)
     missing = [ln for ln in fields if "#" not in ln and not ln.startswith(("name:", "desc"))]
     assert not missing
+    # the energy block's figures carry their source as data (the report prints it)
+    nested = [ln for ln in text.splitlines() if re.match(r"^  [a-z_]+:", ln)]
+    assert all("source:" in ln for ln in nested), [ln for ln in nested if "source:" not in ln]
 
 
 def test_user_profile_file(tmp_path):
