@@ -228,9 +228,9 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str],
 
 HARD_HEADER = [
     "| target | case | motifs | cell sensitivity | cell precision | targets found (conv / "
-    "spiking) | false objects per frame (conv / spiking) | clipped inputs | ADC clipped rails "
-    "| compile + run s |",
-    "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    "spiking) | firm targets missed | false objects per frame (conv / spiking) | clipped inputs "
+    "| ADC clipped rails | compile + run s |",
+    "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
 
 
 def hard_row(score: CaseScore) -> str:
@@ -241,7 +241,8 @@ def hard_row(score: CaseScore) -> str:
     note = f" ({'; '.join(score.notes)})" if score.notes else ""
     return (f"| {score.target} | {score.case}{note} | {motifs} | {ratio(score.sensitivity)} | "
             f"{ratio(score.precision)} | {score.conv_found}/{score.truth} / "
-            f"{score.spk_found}/{score.truth} | {d['conv_false_per_frame']:.1f} / "
+            f"{score.spk_found}/{score.truth} | {score.firm_missed} of {score.firm_found} | "
+            f"{d['conv_false_per_frame']:.1f} / "
             f"{d['spk_false_per_frame']:.1f} | {score.clipped_inputs} | {score.adc_clipped} | "
             f"{score.compile_s + score.run_s:.0f} |")
 
