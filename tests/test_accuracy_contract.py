@@ -144,6 +144,20 @@ def test_the_deadline_never_moves_a_stage_to_the_host():
     assert tried == [{"dft": "time", "cfar": "time"}, {"dft": "resonator", "cfar": "time"}]
 
 
+def test_a_chip_too_small_never_moves_a_stage_to_the_host():
+    tried = []
+
+    def build(motifs, options):  # a spiking CFAR never fits this chip; the host one would
+        tried.append(dict(motifs))
+        if motifs["cfar"] != "host":
+            raise BudgetError("node 'cfar' needs 65,536 neurons, 38,912 available")
+        return _Fake(motifs, 10)
+
+    with pytest.raises(BudgetError, match="65,536 neurons"):
+        search(["dft", "cfar"], build, lambda p: _contract([]))
+    assert tried and all(m["cfar"] != "host" for m in tried)
+
+
 def test_the_cli_measures_with_calibration_frames_and_refuses_a_loss(tmp_path, capsys):
     from compiler.cli import main
 

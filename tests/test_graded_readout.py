@@ -44,9 +44,11 @@ def test_auto_picks_a_graded_payload_on_loihi2_and_the_time_code_elsewhere(grade
     rng = np.random.default_rng(4)
     cal = rng.normal(size=(3, 2, 32))
     spin = compile_graph(_graph(32), "spinnaker2", calibration_inputs={"x": cal}, time_steps=32)
-    assert spin.networks[0].decoders[0].kind != "membrane"
+    assert spin.networks[0].meta["charging"]["f"]["payload_bits"] == 32  # packet payloads
+    binary = compile_graph(_graph(32), "unbounded", calibration_inputs={"x": cal}, time_steps=32)
+    assert binary.networks[0].decoders[0].kind != "membrane"
     with pytest.raises(BudgetError, match="graded spikes.*output_spikes='time'"):
-        compile_graph(_graph(32), "spinnaker2", calibration_inputs={"x": cal}, time_steps=32,
+        compile_graph(_graph(32), "unbounded", calibration_inputs={"x": cal}, time_steps=32,
                       options={"output_spikes": "graded"})
 
 

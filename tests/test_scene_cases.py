@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from compiler.accuracy.contract import firm_detections
 from compiler.chains import range_cfar_chain
 from compiler.demo.hard_cases import measure_case
 from compiler.demo.matching import score_range_peaks
@@ -194,6 +195,12 @@ def test_measure_case_counts_what_the_chains_detect():
     d = score.as_dict()
     assert d["sensitivity"] == score.both_cells / score.conv_cells
     assert d["spk_false_per_frame"] == score.spk_false
+    # firm pairs: those the conventional chain keeps with its threshold 1 dB higher
+    firm = np.asarray(firm_detections(range_cfar_chain(case.config()), "det", out["rp"]))
+    assert 0 < score.firm_found <= score.conv_found
+    assert score.firm_found == sum(score_range_peaks(
+        firm, np.asarray(out["rp"]), [chirp_range_bins(frame.config, frame.truth[0])]).hits)
+    assert 0 <= score.firm_missed <= score.firm_found
 
 
 def test_the_benchmark_reads_motifs_and_lists_the_cases(capsys):

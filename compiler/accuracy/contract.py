@@ -52,7 +52,8 @@ from ir import Graph
 from ir.interpreter import evaluate
 from ir.ops import Input, Output
 
-__all__ = ["Contract", "StageCheck", "Tolerances", "measure_contract", "split_folds"]
+__all__ = ["Contract", "StageCheck", "Tolerances", "firm_detections", "measure_contract",
+           "split_folds"]
 
 
 class Tolerances(BaseModel):
@@ -241,8 +242,8 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
                 src = graph.inputs_of(node)[0]
                 fig = decision_figures(got, want, np.asarray(reference[src]),
                                        axes=_axes_of(graph, node, framed), frames=n_frames,
-                                       firm=_firm(graph, node, reference[src],
-                                                  program.evaluators)).to_dict()
+                                       firm=firm_detections(graph, node, reference[src],
+                                                            program.evaluators)).to_dict()
                 kind = "decisions"
             else:
                 fig = value_figures(got, want).to_dict()
@@ -253,9 +254,10 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
                     note=note)
 
 
-def _firm(graph, node: str, x: np.ndarray, evaluators) -> np.ndarray | None:
-    """The conventional detections of a CFAR node that hold with its threshold
-    :data:`~compiler.accuracy.metrics.FIRM_MARGIN_DB` higher (None: not a CFAR)."""
+def firm_detections(graph, node: str, x: np.ndarray, evaluators=None) -> np.ndarray | None:
+    """The conventional detections of CFAR ``node`` on its input ``x`` that hold with its
+    threshold :data:`~compiler.accuracy.metrics.FIRM_MARGIN_DB` higher (None: not a CFAR
+    on power or amplitude): the cells any faithful code must keep."""
     op = graph.op(node)
     if not hasattr(op, "alpha_for"):
         return None

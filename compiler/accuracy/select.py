@@ -7,8 +7,10 @@ contract (:mod:`compiler.accuracy.contract`) and the frame deadline (the report'
 steps × step time against the frame period). While something fails, it climbs the
 ladder of the op of the *first* failing stage (its upstream spiking ops inside the
 same segment when that op is at its top); a configuration that does not compile
-(a motif the target lacks, a budget) is recorded and skipped. A host rung is the last
-of every ladder: reaching it is said in the result.
+(a motif the target lacks) is recorded and skipped; one too big for the chip climbs the
+spiking rungs only (the host is never a way to fit a chip), and where none fits, its
+:class:`~ir.errors.BudgetError` is raised. A host rung is the last of every ladder,
+for accuracy only: reaching it is said in the result.
 
 Why these rungs (measured; ``docs/chip_accuracy.md``): the time-coded S-FT's read-out
 resolves about ``log₂ T`` bits, so on a scene whose returns span more than ≈ 48 dB it
@@ -155,14 +157,19 @@ def search(ops: Sequence[str], build: Callable[[dict[str, str], dict[str, Any]],
     rungs = [0] * len(ops)
     selection = Selection()
     programs: list[Any] = []
+    budget: BudgetError | None = None  # the first configuration that did not fit the chip
     while len(selection.attempts) < max_attempts:
         motifs, options = ladder.config(rungs)
         attempt = Attempt(config={op: LADDERS[op][r].label for op, r in zip(ops, rungs,
                                                                             strict=True)})
         selection.attempts.append(attempt)
         program = None
+        too_big = False
         try:
             program = build(motifs, options)
+        except BudgetError as err:  # does not fit the chip: never a reason for the host
+            attempt.error, too_big = " ".join(str(err).split()), True
+            budget = budget or err
         except CompileError as err:
             attempt.error = " ".join(str(err).split())
         programs.append(program)
@@ -183,15 +190,17 @@ def search(ops: Sequence[str], build: Callable[[dict[str, str], dict[str, Any]],
                 culprits, deadline = [op for op in ops if motifs[op] != "host"], True
         else:
             culprits = list(ops)
-        # spiking rungs first (the failing op, then its upstream ops), the host last
-        order = [(op, host) for host in (False, True) for op in culprits if op in ops]
+        # spiking rungs first (the failing op, then its upstream ops), the host last (for
+        # accuracy only: a configuration too big for the chip climbs spiking rungs only)
+        order = [(op, host) for host in ((False,) if too_big else (False, True))
+                 for op in culprits if op in ops]
         step = next(((ops.index(op), r) for op, host in order
                      if (r := _next_rung(op, rungs[ops.index(op)], deadline, host)) is not None),
                     None)
         if step is None:
             break
         rungs[step[0]] = step[1]
-    return _give_up(selection, programs, accuracy)
+    return _give_up(selection, programs, accuracy, budget)
 
 
 def _next_rung(op: str, rung: int, deadline: bool, host: bool) -> int | None:
@@ -218,9 +227,12 @@ def _latency(program) -> tuple[int | None, bool | None]:
     return lat.get("total_steps"), lat.get("fits")
 
 
-def _give_up(selection: Selection, programs: list, accuracy: str):
+def _give_up(selection: Selection, programs: list, accuracy: str,
+             budget: BudgetError | None = None):
     scored = [(len(a.contract.failing()), a.fits is False, a.steps or 0, i)
               for i, a in enumerate(selection.attempts) if a.contract is not None]
+    if not scored and budget is not None:  # nothing fits: the chip's limit, as it was
+        raise budget
     if not scored:
         errors = "; ".join(a.error or "" for a in selection.attempts)
         raise AccuracyError(f"no configuration compiles: {errors}")

@@ -10,6 +10,10 @@ the measured seeds and scores both chains:
 * ground-truth targets found (± 1 bin, :mod:`compiler.demo.matching`) by each chain — for a
   range-profile chain (no Doppler DFT) each (target, chirp) pair counts, the target's bin
   following its range migration (:func:`radar.scene.chirp_range_bins`);
+* *firm* targets: those the conventional chain still finds with its CFAR threshold 1 dB
+  higher (:func:`compiler.accuracy.contract.firm_detections`), and how many of them the
+  spiking chain misses (a target right at the threshold flips under any rounding, as
+  between two runs of a sensor; a firm one must be kept);
 * false objects (peaks matching no target, off zero Doppler and beyond the leakage's range
   bins 0-2) of each chain;
 * the spiking run's clipped inputs (``ProgramResult.clipped``) and the ADC's clipped rails.
@@ -33,9 +37,10 @@ from typing import Any, Literal
 import numpy as np
 
 from backends.reference import ReferenceSimulator, run_program
+from compiler.accuracy.contract import firm_detections
 from compiler.chains import CA_CFAR, range_cfar_chain, range_doppler_chain
 from compiler.compile import compile_graph
-from compiler.demo.matching import score_peaks, score_range_peaks
+from compiler.demo.matching import range_peak_hits, score_peaks, score_range_peaks
 from compiler.hardware import load_profile
 from ir import Graph, evaluate
 from ir.errors import BudgetError, RadarConfigError
@@ -106,6 +111,8 @@ class CaseScore:
     spk_found: int = 0
     conv_false: int = 0
     spk_false: int = 0
+    firm_found: int = 0
+    firm_missed: int = 0
     clipped_inputs: int = 0
     adc_clipped: int = 0
     compile_s: float = 0.0
@@ -146,18 +153,25 @@ def score_frame(kind: str, frame: Frame, graph: Graph, conv: Mapping, spk_graph:
     s = _axes_to(spk, spk_graph, "det", order).astype(bool)
     pc = _axes_to(conv, graph, power, order)
     ps = _axes_to(spk, spk_graph, power, order)
+    (src,) = graph.inputs_of("det")
+    f = _axes_to({"det": firm_detections(graph, "det", conv[src])}, graph, "det", order)
     out = {"conv_cells": int(c.sum()), "spk_cells": int(s.sum()), "both_cells": int((c & s).sum())}
     if kind == "map":
         truth = [(int(t.range_bin), int(t.doppler_bin)) for t in frame.truth]
-        cs, ss = (score_peaks(m, p, truth, static_range_bins=STATIC_RANGE_BINS)
-                  for m, p in ((c, pc), (s, ps)))
+        cs, ss, fs = (score_peaks(m, p, truth, static_range_bins=STATIC_RANGE_BINS)
+                      for m, p in ((c, pc), (s, ps), (f, pc)))
+        firm = [x is not None for x in fs.found]
         return {**out, "truth": len(truth), "conv_found": cs.n_found, "spk_found": ss.n_found,
-                "conv_false": cs.n_false, "spk_false": ss.n_false}
+                "conv_false": cs.n_false, "spk_false": ss.n_false, "firm_found": sum(firm),
+                "firm_missed": sum(a and b is None for a, b in zip(firm, ss.found,
+                                                                   strict=True))}
     bins = [chirp_range_bins(frame.config, t) for t in frame.truth]
     cs, ss = (score_range_peaks(m, p, bins, static_bins=STATIC_RANGE_BINS)
               for m, p in ((c, pc), (s, ps)))
+    firm, hit = range_peak_hits(f, pc, bins), range_peak_hits(s, ps, bins)
     return {**out, "truth": len(bins) * cs.n_chirps, "conv_found": sum(cs.hits),
-            "spk_found": sum(ss.hits), "conv_false": cs.n_false, "spk_false": ss.n_false}
+            "spk_found": sum(ss.hits), "conv_false": cs.n_false, "spk_false": ss.n_false,
+            "firm_found": int(firm.sum()), "firm_missed": int((firm & ~hit).sum())}
 
 
 def compile_for(graph: Graph, target: str, calibration_inputs: Mapping[str, np.ndarray], *,

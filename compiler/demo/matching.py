@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["PeakScore", "ProfileScore", "detection_peaks", "match_peak", "score_peaks",
-           "score_range_peaks"]
+__all__ = ["PeakScore", "ProfileScore", "detection_peaks", "match_peak", "range_peak_hits",
+           "score_peaks", "score_range_peaks"]
 
 
 def detection_peaks(mask: np.ndarray, power: np.ndarray) -> np.ndarray:
@@ -134,15 +134,36 @@ def score_range_peaks(mask: np.ndarray, power: np.ndarray, truth_bins: list[np.n
     >>> s.hits, s.n_peaks, s.n_static, s.n_false, s.hit_rate
     ([2], 4, 1, 1, 1.0)
     """
-    peak = ndimage.maximum_filter1d(power, size=3, axis=1, mode="nearest") == power
-    rows, cols = np.nonzero(mask & peak)
-    matched = np.zeros(rows.size, bool)
-    hits = []
-    for bins in truth_bins:
-        want = np.rint(np.asarray(bins))[rows]
-        near = np.abs(cols - want) <= 1
-        matched |= near
-        hits.append(int(np.unique(rows[near]).size))
+    hit, matched, rows, cols = _range_matches(mask, power, truth_bins)
+    hits = [int(h.sum()) for h in hit]
     n_static = int(np.count_nonzero(~matched & (cols < static_bins)))
     return ProfileScore(hits=hits, n_chirps=int(mask.shape[0]), n_peaks=int(rows.size),
                         n_static=n_static, n_false=int(np.count_nonzero(~matched)) - n_static)
+
+
+def range_peak_hits(mask: np.ndarray, power: np.ndarray,
+                    truth_bins: list[np.ndarray]) -> np.ndarray:
+    """``hits[i, m]``: target ``i`` is hit on chirp ``m`` (as :func:`score_range_peaks`).
+
+    Examples
+    --------
+    >>> m = np.zeros((2, 10), bool); m[0, 4] = True
+    >>> range_peak_hits(m, m.astype(float), [np.array([4.2, 6.4])]).tolist()
+    [[True, False]]
+    """
+    return _range_matches(mask, power, truth_bins)[0]
+
+
+def _range_matches(mask, power, truth_bins):
+    """Per target and chirp whether a peak is within ± 1 bin; which peaks matched; the
+    peaks' rows and columns."""
+    peak = ndimage.maximum_filter1d(power, size=3, axis=1, mode="nearest") == power
+    rows, cols = np.nonzero(mask & peak)
+    matched = np.zeros(rows.size, bool)
+    hit = np.zeros((len(truth_bins), mask.shape[0]), bool)
+    for i, bins in enumerate(truth_bins):
+        want = np.rint(np.asarray(bins))[rows]
+        near = np.abs(cols - want) <= 1
+        matched |= near
+        hit[i, rows[near]] = True
+    return hit, matched, rows, cols

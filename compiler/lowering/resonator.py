@@ -91,7 +91,7 @@ from compiler.lowering.values import Value
 from compiler.snn import N_PARTS, PART_AXIS, Decoder, Encoder, Phase
 from compiler.snn.resonator import ResonatorParams
 from compiler.snn.stream import BIT_AXIS, StreamCode
-from ir.errors import CompileError
+from ir.errors import BudgetError, CompileError
 from ir.ops import DFT, Op
 from radar.dsp import dft_matrix
 from radar.windows import window_coefficients
@@ -301,9 +301,32 @@ def _readout(ctx: LoweringContext, node: str) -> str:
     if readout in ("graded", "log") and not host:
         raise CompileError(f"node {node!r}: resonator_readout={readout!r} is read by the "
                            "host only; a spiking consumer needs 'time'", node=node)
+    payload = _payload_fits(ctx)
+    if readout == "graded" and payload is not True:
+        name = getattr(ctx.target, "name", "this target")
+        raise BudgetError(f"node {node!r}: resonator_readout='graded' needs graded spikes "
+                          f"that carry the held state; {name!r} {payload}; use "
+                          "resonator_readout='log'", node=node)
     if readout == "auto" and host:
-        return "graded" if getattr(ctx.target, "graded_spike_bits", None) else "log"
+        return "graded" if payload is True else "log"
     return "time" if readout == "auto" else readout
+
+
+def _payload_fits(ctx: LoweringContext) -> bool | str:
+    """True where a graded spike carries a held state (whose calibrated full scale is about
+    ``2^(state_bits − 2)``, :func:`_bits`), else why not (binary spikes, or a payload
+    narrower than ``state_bits − 1`` bits)."""
+    t = ctx.target
+    width = getattr(t, "graded_spike_bits", None)
+    if t is None:
+        return "is no chip"
+    if not width:
+        return "has binary spikes only (graded_spike_bits: null)"
+    state = getattr(t, "state_bits", None) or 24
+    if width < state - 1:
+        return (f"sends {width}-bit payloads, narrower than the {state - 1} bits of its "
+                f"{state}-bit state at the calibrated full scale")
+    return True
 
 
 def _coefficients(ctx: LoweringContext, node: str, theta: np.ndarray, rho: float,
