@@ -1,6 +1,6 @@
 """Spiking OS-/CA-CFAR vs the conventional CFAR on simulated CARRADA-like range-Doppler maps.
 
-Protocol (issue 5; Vogginger et al. 2022, section 4.1, Eq. 13-14): ``radar.scene`` frames of the
+Protocol (Vogginger et al. 2022, section 4.1, Eq. 13-14): ``radar.scene`` frames of the
 ``carrada`` preset with random scenes of 1-3 targets (pedestrians, cyclists, cars), Tx->Rx
 leakage, static clutter and receiver noise; the map is the rx-summed power ``|X|^2``
 (256 range x 64 Doppler, Hann range window) in dB (``10 log10``, the form CARRADA ships) or

@@ -1,4 +1,4 @@
-"""Classifier acceptance figures: Table 2, the compiled 8-bit SNN, the Table-3 row (issue #8).
+"""Classifier figures: Table 2, the compiled 8-bit SNN, the Table-3 row, the acceptance checks.
 
 1. Regenerates the synthetic ROI dataset of the shipped weights
    (``compiler.classifier.default.DATASET``) and uses its held-out test split.
@@ -11,7 +11,7 @@
    simulator (step mode) and compares with the float SNN: accuracy difference, per-sample
    agreement, and the simulator's synaptic events per sequence (every projection,
    including the input delay line that brings frame ``f`` in at step ``f``).
-4. The Table-3 row of the classifier, then the acceptance checks of issue #8.
+4. The Table-3 row of the classifier, then its acceptance checks.
 
 Usage::
 
@@ -166,7 +166,7 @@ def main() -> None:
                total <= 0.01 * ann_macs),
               ("compiled 8-bit accuracy within 1 pp of float", abs(acc_q - acc_float) <= 0.01),
               ("per-sample agreement >= 98 %", agree >= 0.98)]
-    print("\nAcceptance (issue #8)")
+    print("\nAcceptance checks")
     for name, ok in checks:
         print(f"  {'✓' if ok else '✗'} {name}")
     print(f"\ntotal {time.time() - t0:.0f} s")

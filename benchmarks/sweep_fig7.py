@@ -2,7 +2,7 @@
 LocalCluster.
 
 1 000 simulated CARRADA-like maps (dB) x 8 step counts x {OS, CA} spiking CFAR
-against the conventional CFAR (issue 10 acceptance: < 10 minutes on 2 cores).
+against the conventional CFAR (the goal: < 10 minutes on 2 cores).
 Runs into a fresh folder (nothing is resumed), prints the sensitivity/precision
 table, the wall time, the per-cell CPU seconds and the machine's load average
 (the figure is only meaningful on an otherwise idle machine).

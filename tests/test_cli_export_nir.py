@@ -95,6 +95,20 @@ def test_errors_are_one_line(chain, tmp_path, capsys, extra, expected):
     assert not (tmp_path / "o.nir").exists()
 
 
+def test_a_resonator_chain_is_refused_naming_the_node_the_reason_and_the_fix(chain, tmp_path,
+                                                                              capsys):
+    """NIR has no resonate-and-fire neuron: one typed line, nothing written."""
+    pytest.importorskip("nir")
+    path, frames = chain
+    out = tmp_path / "r.nir"
+    assert main(["export-nir", str(path), "-c", f"x={frames}", "-m", "rng=resonator",
+                 "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and err.startswith("error: node 'rng' (")
+    assert "NIR has no resonate-and-fire neuron" in err and "--motif rng=time" in err
+    assert not out.exists() and not out.with_suffix(".report.json").exists()
+
+
 def test_without_nir_the_error_names_the_extra(chain, tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "nir", None)  # `import nir` raises ImportError
     path, _ = chain

@@ -159,3 +159,25 @@ def test_carrada_compiles_for_loihi():
     io = {r["name"]: r for r in asked.data["frame_io"]}
     assert round(io["ra_map"]["memory_kB"]) == 131
     assert round(io["ra_map"]["bandwidth_Mbit_s"], 1) == 10.5
+
+
+def test_a_chain_without_a_radar_cube_or_map_says_so_instead_of_an_empty_table():
+    """A plain ``input`` chain has no frame-I/O rows; the Markdown said ``|  |`` / ``|``."""
+    import numpy as np
+
+    from compiler.compile import compile_graph
+
+    chain = Graph.from_yaml("""name: plain
+nodes:
+  - {id: x, op: input, shape: {sample: 16}}
+  - {id: rng, op: dft, input: x, axis: sample, out_axis: range, keep: positive}
+  - {id: out, op: output, input: rng}
+""")
+    frames = np.random.default_rng(0).standard_normal((2, 16))
+    report = compile_graph(chain, "loihi2", calibration_inputs={"x": frames},
+                           accuracy="off").records.report
+    assert report.data["frame_io"] == []
+    text = report.to_markdown()
+    section = text.split("## Frame I/O at 10 frames/s\n\n")[1].split("\n\n")[0]
+    assert section.startswith("None: the chain has no `adc_input` cube")
+    assert all(line.strip() not in ("|  |", "|") for line in text.splitlines())

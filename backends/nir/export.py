@@ -126,10 +126,12 @@ def _add_network(net: SpikingNetwork, k: int, nodes: dict, edges: list, report: 
     pops = net.population
     for pop in net.populations:
         if isinstance(pop.params, ResonatorParams):
-            raise ArtifactError(f"population {pop.id!r}: NIR export has no node for the "
-                                "resonate-and-fire neurons of motif 'resonator'; export a "
-                                "chain compiled with motif 'time' for that node",
-                                node=pop.origin.get("node"))
+            node = origin_node(pop.id, pop.origin)
+            raise ArtifactError(f"node {node!r} (population {pop.id!r}, motif 'resonator'): NIR "
+                                "has no resonate-and-fire neuron, so it cannot be exported; "
+                                f"compile it with another DFT motif (--motif {node}=time, or "
+                                f"motifs={{{node!r}: 'time'}} in Python) and export that",
+                                node=node)
     encoders = {e.population: e for e in net.encoders}
     entry, exit_ = {}, {}
     affine_bias = {}  # target pop -> the projection that carries its constant bias

@@ -148,7 +148,7 @@ class DemandModel:
             cols = []
             for info in self._matrices:
                 produce = info.proj.produce
-                cols.append(ravel(coords(tgt, flat, produce), [tgt.shape[a] for a in produce]))
+                cols.append(ravel(tgt, flat, produce))
                 unshared += info.indeg[cols[-1]]
             yield pos, fan_out, unshared, cols
 

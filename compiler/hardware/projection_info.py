@@ -86,7 +86,7 @@ class MatrixInfo:
     def has_synapse_out(self, pop: Population, flat: np.ndarray) -> np.ndarray:
         """Whether each source neuron of ``pop`` (flat indices) has a synapse: its row is live."""
         proj = self.proj
-        c = ravel(coords(pop, flat, proj.contract), [pop.shape[a] for a in proj.contract])
+        c = ravel(pop, flat, proj.contract)
         return self.rownz[c]
 
     def reached(self, src: Population, tgt: Population, flat: np.ndarray,
@@ -94,7 +94,7 @@ class MatrixInfo:
         """Distinct ``(block, source)`` pairs reached by target neurons ``flat`` of ``blk``."""
         proj = self.proj
         rep_axes = tuple(a for a in tgt.axes if a not in proj.produce)
-        p = ravel(coords(tgt, flat, proj.produce), [tgt.shape[a] for a in proj.produce])
+        p = ravel(tgt, flat, proj.produce)
         s_str = strides(src)
         base = np.zeros_like(flat)
         for a, c in zip(rep_axes, coords(tgt, flat, rep_axes), strict=True):

@@ -41,11 +41,21 @@ def coords(pop: Population, flat: np.ndarray, axes: tuple[str, ...]) -> list[np.
     return [(flat // st[a]) % pop.shape[a] for a in axes]
 
 
-def ravel(cs: list[np.ndarray], sizes: list[int]) -> np.ndarray:
-    """Row-major flat index of coordinates ``cs`` in a grid of ``sizes``."""
-    out = np.zeros_like(cs[0]) if cs else np.zeros(0, np.int64)
-    for c, n in zip(cs, sizes, strict=True):
-        out = out * n + c
+def ravel(pop: Population, flat: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
+    """Row-major flat index of neurons ``flat`` of ``pop`` on the grid of ``axes``.
+
+    With no ``axes`` (a matrix that contracts or produces no axis) every index is 0.
+
+    Examples
+    --------
+    >>> from compiler.snn import Population
+    >>> p = Population(id="y", shape={"a": 2, "b": 3})
+    >>> ravel(p, np.array([0, 4, 5]), ("b", "a")).tolist(), ravel(p, np.array([0, 4]), ()).tolist()
+    ([0, 3, 5], [0, 0])
+    """
+    out = np.zeros(flat.shape, np.int64)
+    for c, a in zip(coords(pop, flat, axes), axes, strict=True):
+        out = out * pop.shape[a] + c
     return out
 
 

@@ -61,7 +61,10 @@ def round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
             out.append(rint_feedback(m, h, w_max).ravel())
             rules.append("feedback")
         else:
-            grouped = m.reshape(-1, parts, m.shape[-1])
+            # rows are (position, part), parts last; an input with fewer rows than the
+            # code has parts (the amb motif's one-part relay) is one part
+            per = parts if m.shape[0] % parts == 0 else 1
+            grouped = m.reshape(-1, per, m.shape[-1])
             out.append(np.clip(rint_keep_sums(grouped, axis=0), -w_max, w_max).ravel())
             rules.append("keep_sums")
     return np.concatenate(out), rules

@@ -250,8 +250,12 @@ class Report:
         lines += _table(d["stages"], _STAGE_COLUMNS + ("spikes_measured",
                                                        "synaptic_events_measured"))
         lines += ["", f"## Frame I/O at {d['frame_rate_hz']:g} frames/s", ""]
-        lines += _table(d["frame_io"], ("name", "source", "shape", "bits_per_value",
-                                        "memory_kB", "bandwidth_Mbit_s"))
+        if d["frame_io"]:
+            lines += _table(d["frame_io"], ("name", "source", "shape", "bits_per_value",
+                                            "memory_kB", "bandwidth_Mbit_s"))
+        else:  # an empty pipe table renders as a broken row
+            lines += ["None: the chain has no `adc_input` cube and no range-Doppler or "
+                      "range-angle map."]
         if d.get("boundaries"):
             lines += ["", "## Segment boundaries (host ↔ spiking, per frame)", ""]
             lines += _table(d["boundaries"], ("kind", "from", "to", "node", "values_per_frame",
