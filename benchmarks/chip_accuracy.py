@@ -305,9 +305,16 @@ def main(argv: list[str] | None = None) -> int:
         if not chosen:
             lines += preset_rows(target, seeds, args.quick, motifs)
         for name in chosen or list(HARD_CASES):
-            score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
-                                 calibration_seeds=(*CALIBRATION_SEEDS, 102) if args.auto
-                                 else CALIBRATION_SEEDS, measured=args.auto)
+            try:
+                score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
+                                     calibration_seeds=(*CALIBRATION_SEEDS, 102) if args.auto
+                                     else CALIBRATION_SEEDS, measured=args.auto)
+            except BudgetError as err:  # the target refuses a motif: say so, do not stop
+                given = ", ".join(f"{k}={v}" for k, v in motifs.items()) or "defaults"
+                hard_lines.append(f"| {target} | {name} | {given} | {_refused(err)} "
+                                  "| | | | | | |")
+                print(hard_lines[-1], flush=True)
+                continue
             scores.append(score)
             hard_lines.append(hard_row(score))
             print(hard_lines[-1], flush=True)
