@@ -1,11 +1,12 @@
 """The reference step engine against Lava's fixed-point processes and NengoLoihi's emulator.
 
 Small networks of the motifs the chip expresses, compiled for ``loihi`` by the real
-pipeline (OS-CFAR; the CA-CFAR, refused on ``loihi``, on its number formats) or built by hand in raw LSBs (a leaky LIF layer with reset to
-0, bias and rate-coded input), saved, run in both chip models as subprocesses of the
-Python 3.10 cross-check environment (``radarsnn crosscheck --build-env``; ``.ci/run``
-builds it) and compared spike for spike with ``simulate(mode="step", arithmetic="int64")``.
-Without that environment the module is skipped and says why.
+pipeline (OS-CFAR; the CA-CFAR, refused on ``loihi``, on its number formats) or built by
+hand in raw LSBs (a leaky LIF layer with reset to 0, bias and rate-coded input), saved,
+run in both chip models as subprocesses of the Python 3.10 cross-check environment
+(``radarsnn crosscheck --build-env``; ``.ci/run`` builds it) and compared spike for spike
+with ``simulate(mode="step", arithmetic="int64")``. Without that environment the module is
+skipped and says why.
 """
 
 from __future__ import annotations
