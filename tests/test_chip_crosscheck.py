@@ -176,12 +176,12 @@ def test_delay_relays_on_loihi_reset_to_zero_and_match_lava() -> None:
 
     w = np.eye(3)
     net = SpikingNetwork(
-        name="relay", n_steps=120,
+        name="relay", n_steps=90,
         populations=[Population(id="in", shape={"i": 3}, source=True),
                      Population(id="out", shape={"i": 3},
                                 params=NeuronParams(du=1.0, v_th=1.0, reset="value"))],
         projections=[MatrixProjection(id="far", source="in", target="out", contract=("i",),
-                                      produce=("i",), weights=w, delays=np.full((3, 3), 90))],
+                                      produce=("i",), weights=w, delays=np.full((3, 3), 70))],
         encoders=[Encoder(port="x", population="in", code=RateCode(max_rate=0.25))],
         decoders=[Decoder(port="count", population="out", kind="count")])
     relayed = relay_long_delays(net, load_profile("loihi"), "relay")
@@ -193,4 +193,4 @@ def test_delay_relays_on_loihi_reset_to_zero_and_match_lava() -> None:
     matches = compare(relayed, ref, chip)
     assert len(matches) == len(relayed.populations) - 1
     assert all(m.compared == "all spikes" and m.exact for m in matches), matches
-    assert ref.spike_counts["out"] > 5 and ref.spike_counts["in__relay1"] > 20
+    assert ref.spike_counts["out"] > 5 and ref.spike_counts["in__relay1"] > 8
