@@ -70,8 +70,9 @@ CASES = {
 
 #: ``--targets loihi-programmable``: loihi's number formats with neurons that have every
 #: feature — what the stock chip does with the motifs the ``loihi`` compile refuses.
-PROGRAMMABLE = {"current_decay_offset_lsb": 0, "reset": "programmable",
-                "fire_once": "programmable", "threshold_schedule": True, "input_gate": True}
+PROGRAMMABLE = {"current_decay_offset_lsb": 0, "full_voltage_decay": True,
+                "reset": "programmable", "fire_once": "programmable",
+                "threshold_schedule": True, "input_gate": True}
 
 
 def _profile(target: str):

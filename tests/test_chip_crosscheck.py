@@ -42,8 +42,8 @@ MODELS = ("lava", "nengo-loihi")
 #: spiking and input gates) is refused on the stock ``loihi``; compiled on these formats it
 #: shows, in both chip models, what the stock neuron does with it (the reason it is refused).
 LOIHI_PROGRAMMABLE = load_profile("loihi").model_copy(update={
-    "current_decay_offset_lsb": 0, "reset": "programmable", "fire_once": "programmable",
-    "threshold_schedule": True, "input_gate": True})
+    "current_decay_offset_lsb": 0, "full_voltage_decay": True, "reset": "programmable",
+    "fire_once": "programmable", "threshold_schedule": True, "input_gate": True})
 
 
 def _cfar(kind: str) -> tuple[SpikingNetwork, np.ndarray]:

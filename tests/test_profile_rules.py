@@ -104,8 +104,9 @@ def _small():
 
 #: Neuron fields that let loihi's budgets run every motif (a hypothetical chip: the stock
 #: Loihi 1 refuses the time-coded S-FT, docs/hardware.md).
-PROGRAMMABLE = {"current_decay_offset_lsb": 0, "reset": "programmable",
-                "fire_once": "programmable", "threshold_schedule": True, "input_gate": True}
+PROGRAMMABLE = {"current_decay_offset_lsb": 0, "full_voltage_decay": True,
+                "reset": "programmable", "fire_once": "programmable",
+                "threshold_schedule": True, "input_gate": True}
 
 
 def test_max_steps_per_frame_is_a_budget(tmp_path):

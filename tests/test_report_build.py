@@ -123,8 +123,9 @@ def test_network_runs_by_hand():
 
 #: loihi's budgets and formats with neurons that have every feature (a hypothetical chip):
 #: the stock Loihi 1 refuses the time-coded S-FT (no non-leaking current, fire-once, gates).
-PROGRAMMABLE = {"current_decay_offset_lsb": 0, "reset": "programmable",
-                "fire_once": "programmable", "threshold_schedule": True, "input_gate": True}
+PROGRAMMABLE = {"current_decay_offset_lsb": 0, "full_voltage_decay": True,
+                "reset": "programmable", "fire_once": "programmable",
+                "threshold_schedule": True, "input_gate": True}
 
 
 def test_carrada_chain_is_refused_on_the_stock_loihi(capsys):

@@ -117,30 +117,44 @@ def test_os_cfar_on_loihi_resets_to_zero_and_detects_as_fire_once() -> None:
 
 
 def test_the_classifier_on_loihi_needs_layers_that_reset_to_zero(tmp_path) -> None:
+    """Layers that subtract are refused; with reset to 0 every population is stock: the input
+    relays and the max-pool OR neurons (dv = 1, which Loihi's 12-bit dv cannot hold) run with
+    dv = 0, the same spikes (their weights reach the threshold: after each step v = 0)."""
     from compiler.classifier import save_weights
-    from ir.ops.classify import LIF, Classifier, Dense, Integrator, LevelsEncoding
+    from ir.ops.classify import LIF, Classifier, Conv2d, Integrator, LevelsEncoding, Pool
 
-    path = tmp_path / "w.npz"
-    save_weights(path, {"layers.0.weight": np.full((3, 4), 0.5),
-                        "layers.1.weight": np.ones((2, 3))})
+    def op(reset: str) -> Classifier:
+        return Classifier(num_classes=2, weights=str(tmp_path / "w.npz"),
+                          encoding=LevelsEncoding(levels=(0.0,)),
+                          layers=(Conv2d(channels=2, kernel=(2, 2), stride=(2, 2),
+                                         neuron=LIF(dv=0.25, reset=reset)),
+                                  Pool(mode="max", size=(2, 2)), Integrator(units=2)))
 
-    def compiled(reset: str):
-        op = Classifier(num_classes=2, weights=str(path), encoding=LevelsEncoding(levels=(0.0,)),
-                        layers=(Dense(units=3, neuron=LIF(dv=0.25, reset=reset)),
-                                Integrator(units=2)))
+    rng = np.random.default_rng(5)
+    save_weights(tmp_path / "w.npz", {k: rng.normal(0.8, 0.6, shape) for k, shape in
+                                      op("value").weight_shapes("cls", (4, 4)).items()})
+
+    def compiled(reset: str, target=LOIHI):
         return compile_graph(Graph.from_dict({"name": "clf", "nodes": [
-            {"id": "roi", "op": "input", "shape": {"frame": 2, "doppler": 2, "range": 2},
+            {"id": "roi", "op": "input", "shape": {"frame": 3, "doppler": 4, "range": 4},
              "domain": "db"},
-            {"id": "cls", "op": "classifier", "input": "roi", **op.params()},
-            {"id": "out", "op": "output", "input": "cls"}]}), "loihi")
+            {"id": "cls", "op": "classifier", "input": "roi", **op(reset).params()},
+            {"id": "out", "op": "output", "input": "cls"}]}), target)
 
     with pytest.raises(BudgetError, match=r"node 'cls' \(motif snn, population 'cls/l0'\) "
                                           r"needs subtractive reset"):
         compiled("subtract")
-    program = compiled("value")
-    _stock_only(program)
-    layer = program.networks[0].population["cls/l0"].params
-    assert (layer.reset, layer.v_reset) == ("value", 0.0)
+    stock = compiled("value")
+    _stock_only(stock)
+    pops = stock.networks[0].population
+    assert (pops["cls/l0"].params.reset, pops["cls/l0"].params.v_reset) == ("value", 0.0)
+    assert pops["cls/input"].params.dv == pops["cls/l1"].params.dv == 0.0
+    full = compiled("value", LOIHI.model_copy(update={"full_voltage_decay": True}))
+    assert full.networks[0].population["cls/l1"].params.dv == 1.0
+    x = rng.normal(0.5, 1.0, size=(6, 3, 4, 4))
+    a, b = (run_program(p, {"roi": x}, mode="step", arithmetic="int64") for p in (stock, full))
+    assert a.spike_counts == b.spike_counts and a.spike_counts["cls/l1"] > 0
+    np.testing.assert_array_equal(a.values["cls"], b.values["cls"])
 
 
 def test_delay_relays_reset_to_zero_on_loihi() -> None:

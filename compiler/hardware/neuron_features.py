@@ -8,6 +8,7 @@ fields (``docs/hardware.md``):
 feature                the population needs it when                   profile field
 =====================  =============================================  ==========================
 non-leaking current    ``du·4096 < current_decay_offset_lsb``         ``current_decay_offset_lsb``
+no membrane memory     ``dv = 1``                                     ``full_voltage_decay``
 subtractive reset      it may spike and resets by ``v −= θ``          ``reset`` (``zero``)
 reset to a value ≠ 0   it may spike and resets to ``v_reset ≠ 0``     ``reset`` (not
                                                                       ``programmable``)
@@ -69,6 +70,9 @@ def missing_features(params: NeuronParams, profile) -> list[str]:
     if round(params.du * DECAY_ONE) < offset:
         out.append(f"a non-leaking current (du = {params.du:g}; the current decays by at least "
                    f"{offset}/{DECAY_ONE} a step: current_decay_offset_lsb {offset})")
+    if params.dv == 1.0 and not profile.full_voltage_decay:
+        out.append("a membrane without memory (dv = 1; the decay register stops below 1: "
+                   "full_voltage_decay false)")
     may_spike = any(ph.spiking_on for ph in params.phases)
     reset = profile.reset
     if may_spike and params.reset == "subtract" and reset == "zero":

@@ -28,8 +28,9 @@ neurons_per_core, input_axons_per_core, output_axons_per_core, synapse_memory_bi
 bits_per_synapse, weight_bits, threshold_bits, weight_exponent_max, threshold_mantissa_bits, \
 threshold_shift, bias_mantissa_bits, bias_exponent_max, state_bits, graded_spike_bits, \
 per_neuron_scales, delay_bits, max_steps_per_frame, time_step_s, shared_weights_per_core, \
-current_decay_offset_lsb, reset, fire_once, threshold_schedule, input_gate, resonate_and_fire; \
-give each (null = unbounded), or 'unbounded: true' to leave budgets out on purpose
+current_decay_offset_lsb, full_voltage_decay, reset, fire_once, threshold_schedule, \
+input_gate, resonate_and_fire; give each (null = unbounded), or 'unbounded: true' to leave \
+budgets out on purpose
 """
 
 from __future__ import annotations
@@ -125,6 +126,9 @@ class HardwareProfile(BaseModel):
     current_decay_offset_lsb : int
         The current decay the chip adds to every ``du``, in ``1/4096`` per step (Loihi 1:
         1, so ``du = 0``, a non-leaking current, does not exist).
+    full_voltage_decay : bool
+        Whether ``dv = 1`` (a membrane that forgets every step) exists (Loihi 1: the 12-bit
+        ``dv`` register stops at 4095).
     reset : {"zero", "subtract", "programmable"}
         What a spike does to the membrane: ``v = 0`` only, ``v -= θ`` only, or any reset
         of the neuron model (``value``, ``subtract``, ``fire_once``).
@@ -173,6 +177,7 @@ class HardwareProfile(BaseModel):
     time_step_s: float | None = Field(default=None, gt=0)
     shared_weights_per_core: _Bool = False
     current_decay_offset_lsb: _Int = Field(default=0, ge=0, le=4096)
+    full_voltage_decay: _Bool = True
     reset: Literal["zero", "subtract", "programmable"] = "programmable"
     fire_once: Literal["none", "programmable"] = "programmable"
     threshold_schedule: _Bool = True
