@@ -50,7 +50,7 @@ from compiler.demo.matching import score_peaks
 from compiler.hardware import load_profile
 from compiler.lowering.dft_common import sft_rmse
 from ir import Graph, evaluate
-from ir.errors import BudgetError
+from ir.errors import CompileError
 from radar.config import preset
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Target, simulate_frame
@@ -173,7 +173,7 @@ def openradar_rows(target: str, motifs: dict[str, str] | None = None) -> dict | 
     return tot
 
 
-def _refused(err: BudgetError) -> str:
+def _refused(err: CompileError) -> str:
     """A table cell for a compile the target refuses: the node and what it lacks."""
     text = " ".join(str(err).split())
     if ", which the stock neurons of " in text:  # the motif needs a missing neuron feature
@@ -208,7 +208,7 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str]) 
     for label, name, scene in cases:
         try:
             t = scene_rows(name, target, seeds if scene is None else range(2), scene, motifs)
-        except BudgetError as err:  # a motif the chip's stock neurons cannot run: say so
+        except CompileError as err:  # a motif the chip's stock neurons cannot run: say so
             rows.append(f"| {target} | {label} | {_refused(err)} | | | | |")
             print(rows[-1], flush=True)
             continue
@@ -221,7 +221,7 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str]) 
         return rows
     try:
         real = openradar_rows(target, motifs)
-    except BudgetError as err:
+    except CompileError as err:
         real = None
         rows.append(f"| {target} | OpenRadar TI captures, each calibrated on the other | "
                     f"{_refused(err)} | | | | |")
@@ -234,7 +234,7 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str]) 
     try:
         rmse = ti_rmse(target, motifs=motifs)
         cell = f"RMSE {'–' if rmse is None else f'{rmse:.4f}'}"
-    except BudgetError as err:  # the chip cannot hold it: say so, do not stop
+    except CompileError as err:  # the chip cannot hold it or run it: say so, do not stop
         cell = _refused(err)
     rows.append(f"| {target} | TI chirps, range S-FT T=256, leave-one-out | {cell} | | | | |")
     print(rows[-1], flush=True)
@@ -309,7 +309,7 @@ def main(argv: list[str] | None = None) -> int:
                 score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
                                      calibration_seeds=(*CALIBRATION_SEEDS, 102) if args.auto
                                      else CALIBRATION_SEEDS, measured=args.auto)
-            except BudgetError as err:  # the target refuses a motif: say so, do not stop
+            except CompileError as err:  # the target refuses a motif: say so, do not stop
                 given = ", ".join(f"{k}={v}" for k, v in motifs.items()) or "defaults"
                 hard_lines.append(f"| {target} | {name} | {given} | {_refused(err)} "
                                   "| | | | | | |")

@@ -131,7 +131,7 @@ PROGRAMMABLE = {"current_decay_offset_lsb": 0, "full_voltage_decay": True,
 def test_carrada_chain_is_refused_on_the_stock_loihi(capsys):
     assert main(["report", str(CARRADA), "--target", "loihi", "--json"]) != 0
     err = json.loads(capsys.readouterr().out)
-    assert err["type"] == "BudgetError" and err["node"] == "rng__moving"
+    assert err["type"] == "CompileError" and err["node"] == "rng__moving"
     assert "non-leaking current" in err["error"] and "motifs={'rng': 'host'}" in err["error"]
 
 

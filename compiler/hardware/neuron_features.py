@@ -39,7 +39,7 @@ from __future__ import annotations
 
 from compiler.snn import DECAY_ONE, NeuronParams
 from compiler.snn.resonator import ResonatorParams
-from ir.errors import BudgetError
+from ir.errors import CompileError
 
 __all__ = ["check_population", "missing_features"]
 
@@ -106,8 +106,11 @@ def check_population(population, profile, *, fix: str) -> None:
 
     Raises
     ------
-    BudgetError
-        One line: the node, motif and population, the missing features, the fix.
+    CompileError
+        One line: the node, motif and population, the missing features, the fix. A
+        missing feature is a motif the target lacks (the ``motifs="auto"`` search skips
+        it, and may take the host), not a budget (:class:`~ir.errors.BudgetError`: too big
+        for the chip).
 
     Examples
     --------
@@ -118,7 +121,7 @@ def check_population(population, profile, *, fix: str) -> None:
     >>> check_population(pop, load_profile("loihi"), fix="use target loihi2")
     Traceback (most recent call last):
     ...
-    ir.errors.BudgetError: node 'f' (motif rate, population 'f/out') needs subtractive reset \
+    ir.errors.CompileError: node 'f' (motif rate, population 'f/out') needs subtractive reset \
 (reset: zero; the stock neuron sets v = 0), which the stock neurons of loihi lack; use target loihi2
     """
     if profile is None or population.source:
@@ -126,6 +129,6 @@ def check_population(population, profile, *, fix: str) -> None:
     missing = missing_features(population.params, profile)
     if missing:
         node, motif = population.origin.get("node", "?"), population.origin.get("motif", "?")
-        raise BudgetError(f"node {node!r} (motif {motif}, population {population.id!r}) needs "
+        raise CompileError(f"node {node!r} (motif {motif}, population {population.id!r}) needs "
                           f"{' and '.join(missing)}, which the stock neurons of "
                           f"{profile.name} lack; {fix}", node=node)
