@@ -108,7 +108,8 @@ class HardwareProfile(BaseModel):
     bias_mantissa_bits, bias_exponent_max : int or None, int
         Biases are a signed mantissa of that width times ``2^e``, ``0 ≤ e ≤ max``.
     state_bits : int or None
-        Signed width of the neuron state ``u``, ``v`` (documented; not simulated).
+        Signed width of the neuron state ``u``, ``v`` in state units (not wrapped or
+        saturated by the simulator: an ``int64`` run counts the states beyond it).
     graded_spike_bits : int or None
         Payload width of graded spikes (``None``: binary spikes only).
     per_neuron_scales : bool
