@@ -234,10 +234,10 @@ def test_state_beyond_the_chips_range_is_counted_by_hand() -> None:
     # weights ±9: u = ±9 is beyond from step 0 (where the chip's u wraps): every step
     assert simulate(_ramp("value", 9.0), {"x": x}, mode="step",
                     arithmetic="int64").state_overflow == {"b": 8}
-    # no state width (not quantized for a chip) or float64: nothing counted
+    # float64 counts the same; no state width (not quantized for a chip): nothing counted
+    assert simulate(_ramp("value", 3.0), {"x": x}, mode="step").state_overflow == {"b": 4}
     assert simulate(_ramp("value", 3.0, bits=None), {"x": x}, mode="step",
                     arithmetic="int64").state_overflow == {}
-    assert simulate(_ramp("value", 3.0), {"x": x}, mode="step").state_overflow == {}
     assert "2 neuron-steps" not in step.summary() and "4 neuron-steps beyond" in step.summary()
 
 

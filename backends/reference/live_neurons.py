@@ -35,7 +35,7 @@ class LiveNeurons:
     n : int
         Neurons (frames × population size).
     state_limit : int, optional
-        The chip's state range ``±state_limit`` (integer arithmetic): each step, the
+        The chip's state range ``±state_limit``: each step, the
         neurons whose ``u`` or ``v`` lies beyond it after the update (before the threshold
         test) are counted in :attr:`overflow` — where the chip's 24-bit ``u`` would wrap
         and its ``v`` saturate (and a saturated ``v`` fire); the engine keeps computing

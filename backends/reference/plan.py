@@ -72,9 +72,9 @@ class SimPlan:
     @property
     def state_limit(self) -> int | None:
         """The chip's state range ``2^(state_bits−1) − 1`` in state units, for a network
-        quantized for a target with ``state_bits`` and run in ``int64`` (else ``None``)."""
+        quantized for a target with ``state_bits`` (else ``None``)."""
         bits = self.network.meta.get("state_bits")
-        return (1 << (int(bits) - 1)) - 1 if bits and self.integer else None
+        return (1 << (int(bits) - 1)) - 1 if bits else None
 
     @property
     def populations(self) -> Mapping[str, Population]:

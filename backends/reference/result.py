@@ -27,7 +27,7 @@ class Activity:
         Per population, ``(n_frames, n_steps, size)`` bool spikes, when recorded.
     overflow : dict
         Per population, neuron-steps with ``u`` or ``v`` beyond the chip's state range
-        (the step engine, ``int64``; populations without any left out).
+        (the step engine; populations without any left out).
     """
 
     first_spike: dict[str, np.ndarray]
@@ -68,8 +68,8 @@ class SimResult:
         clipped (``out_of_range="clip"``; ports without any are left out).
     state_overflow : dict of str to int
         Per population, neuron-steps whose ``u`` or ``v`` left the chip's state range
-        ``±(2^(state_bits−1) − 1)`` (a network quantized for a target with ``state_bits``,
-        run in ``int64``): there the chip's ``u`` wraps and its ``v`` saturates (and a
+        ``±(2^(state_bits−1) − 1)`` (a network quantized for a target with
+        ``state_bits``): there the chip's ``u`` wraps and its ``v`` saturates (and a
         saturated ``v`` fires) while this engine computes wider. The step engine counts
         every step; the closed form counts the final membranes only (a lower bound).
     """

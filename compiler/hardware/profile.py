@@ -109,7 +109,7 @@ class HardwareProfile(BaseModel):
         Biases are a signed mantissa of that width times ``2^e``, ``0 ≤ e ≤ max``.
     state_bits : int or None
         Signed width of the neuron state ``u``, ``v`` in state units (not wrapped or
-        saturated by the simulator: an ``int64`` run counts the states beyond it).
+        saturated by the simulator: a run counts the states beyond it).
     graded_spike_bits : int or None
         Payload width of graded spikes (``None``: binary spikes only).
     per_neuron_scales : bool
