@@ -25,7 +25,7 @@ not a feature; neither is a population that never spikes (its membrane is read).
 Examples
 --------
 >>> from compiler.hardware import load_profile
->>> from compiler.snn import NeuronParams, Phase
+>>> from compiler.snn import NeuronParams
 >>> ramp = NeuronParams(du=0.0, dv=0.0, v_th=5.0, reset="fire_once")
 >>> [m.split(" (")[0] for m in missing_features(ramp, load_profile("loihi"))]
 ['a non-leaking current', 'fire-once']
