@@ -35,6 +35,7 @@ import argparse
 import json
 import os
 import platform
+import re
 import sys
 import time
 from pathlib import Path
@@ -49,7 +50,7 @@ from compiler.demo.matching import score_peaks
 from compiler.hardware import load_profile
 from compiler.lowering.dft_common import sft_rmse
 from ir import Graph, evaluate
-from ir.errors import BudgetError
+from ir.errors import CompileError
 from radar.config import preset
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Target, simulate_frame
@@ -176,6 +177,16 @@ def openradar_rows(target: str, motifs: dict[str, str] | None = None) -> dict | 
     return tot
 
 
+def _refused(err: CompileError) -> str:
+    """A table cell for a compile the target refuses: the node and what it lacks."""
+    text = " ".join(str(err).split())
+    if ", which the stock neurons of " in text:  # the motif needs a missing neuron feature
+        head = text.split(", which the stock neurons of ")[0]
+        head = re.sub(r"\s*\([^()]*\)", "", head)  # the details in brackets
+        return "refused: " + re.sub(r": [^:]*?(?= and |$)", "", head)
+    return "does not fit: " + text[:160]
+
+
 def _ratio(a: int, b: int) -> str:
     return f"{a / b:.3f}" if b else "–"
 
@@ -201,8 +212,13 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str],
     cases += [(f"carrada + target {db} dB below the strongest", "carrada",
                dynamic_range_scene(db)) for db in (30, 45, 60)]
     for label, name, scene in cases:
-        t = scene_rows(name, target, seeds if scene is None else range(2), scene, motifs,
-                       measured)
+        try:
+            t = scene_rows(name, target, seeds if scene is None else range(2), scene, motifs,
+                           measured)
+        except CompileError as err:  # a motif the chip's stock neurons cannot run: say so
+            rows.append(f"| {target} | {label} | {_refused(err)} | | | | |")
+            print(rows[-1], flush=True)
+            continue
         rows.append(f"| {target} | {label} | {_ratio(t['hits'], t['conv'])} | "
                     f"{_ratio(t['hits'], t['spk'])} | {t['conv_found']}/{t['truth']} / "
                     f"{t['spk_found']}/{t['truth']} | {t['conv_false']} / {t['spk_false']} | "
@@ -210,7 +226,13 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str],
         print(rows[-1], flush=True)
     if quick:
         return rows
-    real = openradar_rows(target, motifs)
+    try:
+        real = openradar_rows(target, motifs)
+    except CompileError as err:
+        real = None
+        rows.append(f"| {target} | OpenRadar TI captures, each calibrated on the other | "
+                    f"{_refused(err)} | | | | |")
+        print(rows[-1], flush=True)
     if real is not None:
         rows.append(f"| {target} | OpenRadar TI captures, each calibrated on the other | "
                     f"{_ratio(real['hits'], real['conv'])} | "
@@ -219,8 +241,8 @@ def preset_rows(target: str, seeds: range, quick: bool, motifs: dict[str, str],
     try:
         rmse = ti_rmse(target, motifs=motifs)
         cell = f"RMSE {'–' if rmse is None else f'{rmse:.4f}'}"
-    except BudgetError as err:  # the chip cannot hold it: say so, do not stop
-        cell = "does not fit: " + " ".join(str(err).split())[:160]
+    except CompileError as err:  # the chip cannot hold it or run it: say so, do not stop
+        cell = _refused(err)
     rows.append(f"| {target} | TI chirps, range S-FT T=256, leave-one-out | {cell} | | | | |")
     print(rows[-1], flush=True)
     return rows
@@ -292,10 +314,16 @@ def main(argv: list[str] | None = None) -> int:
         if not chosen:
             lines += preset_rows(target, seeds, args.quick, motifs, args.auto)
         for name in chosen or list(HARD_CASES):
-            score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
-                                 calibration_seeds=(*CALIBRATION_SEEDS, HELD_BACK_SEED)
-                                 if args.auto
-                                 else CALIBRATION_SEEDS, measured=args.auto)
+            try:
+                score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
+                                     calibration_seeds=(*CALIBRATION_SEEDS, HELD_BACK_SEED)
+                                     if args.auto else CALIBRATION_SEEDS, measured=args.auto)
+            except CompileError as err:  # the target refuses a motif: say so, do not stop
+                given = ", ".join(f"{k}={v}" for k, v in motifs.items()) or "defaults"
+                hard_lines.append(f"| {target} | {name} | {given} | {_refused(err)} "
+                                  "| | | | | | | |")
+                print(hard_lines[-1], flush=True)
+                continue
             scores.append(score)
             hard_lines.append(hard_row(score))
             print(hard_lines[-1], flush=True)

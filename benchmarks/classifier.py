@@ -7,7 +7,8 @@
    settings but no events budget) with torch; SNN (spike input) = the shipped weights,
    run by the numpy reference forward pass. Parameters, accuracy, mean spikes per
    sequence (the input's included, as in the paper), synaptic events, MACs (dense counts).
-3. Compiles the SNN for ``loihi`` (8-bit weights), runs the test set in the reference
+3. Compiles the SNN for ``loihi2`` (8-bit weights; the stock ``loihi`` refuses its layers'
+   subtractive reset, ``docs/hardware.md``), runs the test set in the reference
    simulator (step mode) and compares with the float SNN: accuracy difference, per-sample
    agreement, and the simulator's synaptic events per sequence (every projection,
    including the input delay line that brings frame ``f`` in at step ``f``).
@@ -137,7 +138,7 @@ def main() -> None:
           f"{ref.synaptic_events.mean() / ann_macs:.3%}; float forward {t_float:.1f} s")
 
     graph = _graph(op)
-    program = compile_graph(graph, target="loihi")
+    program = compile_graph(graph, target="loihi2")
     net = next(s.network for s in program.segments if s.kind == "spiking")
     x_in = np.transpose(te.x, (0, 1, 3, 2))  # (n, frame, doppler, range) as the chain's input
     t2 = time.time()
@@ -150,7 +151,7 @@ def main() -> None:
     n = te.x.shape[0]
     events = {k: v / n for k, v in sim.synaptic_events.items()}
     total = sum(events.values())
-    print(f"\nCompiled for loihi (8-bit weights), step simulator: accuracy {acc_q:.1%} vs float "
+    print(f"\nCompiled for loihi2 (8-bit weights), step simulator: accuracy {acc_q:.1%} vs float "
           f"{acc_float:.1%} (diff {100 * (acc_q - acc_float):+.2f} pp), per-sample agreement "
           f"{agree:.1%}; {n} sequences in {t_sim:.1f} s")
     print("synaptic events per sequence (simulator): "

@@ -106,10 +106,9 @@ def test_shipped_weights_compile_to_8_bits_agree_and_meet_the_events_budget() ->
     ds = make_dataset(16, seed=99, roi_shape=ROI_SHAPE)  # ~30 sequences, not the test split
     ref = classify(op, load_weights(op, ROI_SHAPE), ds.x)
     g = _chain(op, {"frame": 8, "doppler": ROI_SHAPE[1], "range": ROI_SHAPE[0]})
-    program = compile_graph(g, target="loihi")
+    program = compile_graph(g, target="loihi2")  # loihi: no subtractive reset (below)
     net = next(s.network for s in program.segments if s.kind == "spiking")
-    # every stored weight is an 8-bit mantissa times its projection's exponent (loihi's
-    # thresholds are a mantissa << 6, so populations with a leak sit 2**6 finer)
+    # every stored weight is an 8-bit mantissa times its projection's exponent
     (record,) = program.records["quantize"]
     for p in net.projections:
         if p.values is not None:

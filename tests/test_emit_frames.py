@@ -25,7 +25,7 @@ CAL = np.random.default_rng(0).standard_normal((3, 2, 16))
 
 @pytest.fixture(scope="module")
 def package(tmp_path_factory):
-    program = compile_graph(GRAPH, "loihi", calibration_inputs={"x": CAL}, time_steps=32,
+    program = compile_graph(GRAPH, "loihi2", calibration_inputs={"x": CAL}, time_steps=32,
                             motifs={"m": "host"})
     folder = tmp_path_factory.mktemp("pkg")
     emit_numpy(program, folder, name="framed_pkg")

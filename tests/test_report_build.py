@@ -121,8 +121,27 @@ def test_network_runs_by_hand():
                          {"multiplexed": True, "repetitions": 3}]) == 7
 
 
-def test_carrada_chain_reports_on_loihi_from_the_cli(capsys):
-    assert main(["report", str(CARRADA), "--target", "loihi", "--json"]) == 0
+#: loihi's budgets and formats with neurons that have every feature (a hypothetical chip):
+#: the stock Loihi 1 refuses the time-coded S-FT (no non-leaking current, fire-once, gates).
+PROGRAMMABLE = {"current_decay_offset_lsb": 0, "full_voltage_decay": True,
+                "reset": "programmable", "fire_once": "programmable",
+                "threshold_schedule": True, "input_gate": True}
+
+
+def test_carrada_chain_is_refused_on_the_stock_loihi(capsys):
+    assert main(["report", str(CARRADA), "--target", "loihi", "--json"]) != 0
+    err = json.loads(capsys.readouterr().out)
+    assert err["type"] == "CompileError" and err["node"] == "rng__moving"
+    assert "non-leaking current" in err["error"] and "motifs={'rng': 'host'}" in err["error"]
+
+
+def test_carrada_chain_reports_on_loihi_budgets_from_the_cli(capsys, tmp_path):
+    import yaml
+
+    doc = {**load_profile("loihi").model_dump(), **PROGRAMMABLE}
+    (tmp_path / "loihi_prog.yaml").write_text(yaml.safe_dump(doc))
+    assert main(["report", str(CARRADA), "--target", str(tmp_path / "loihi_prog.yaml"),
+                 "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = {r["node"]: r for r in data["stages"]}
     # rng (256 repetitions) and dop (1 024) multiplexed; the OS-CFAR stays spatial (Table 3)
@@ -137,12 +156,13 @@ def test_carrada_chain_reports_on_loihi_from_the_cli(capsys):
     assert lat["total_steps"] == 1280 * 768 + 100 and lat["fits"] is False
 
 
-def test_carrada_compiles_for_loihi():
+def test_carrada_compiles_for_loihi_budgets():
     from compiler.calibration import synthetic_inputs
     from compiler.compile import compile_graph
 
     g = Graph.from_yaml(CARRADA)
-    prog = compile_graph(g, target="loihi", calibration_inputs=synthetic_inputs(g, seed=0))
+    target = load_profile("loihi").model_copy(update=PROGRAMMABLE)
+    prog = compile_graph(g, target=target, calibration_inputs=synthetic_inputs(g, seed=0))
     assert set(prog.records["timings"]) >= {"lower", "split", "place", "report"}
     assert prog.records["report"].data["totals"]["cores"] <= 128
     # issue 6 acceptance, computed from the compiled chain's JSON report

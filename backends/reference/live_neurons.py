@@ -34,6 +34,12 @@ class LiveNeurons:
         The population's resolved parameters.
     n : int
         Neurons (frames × population size).
+    state_limit : int, optional
+        The chip's state range ``±state_limit``: each step, the
+        neurons whose ``u`` or ``v`` lies beyond it after the update (before the threshold
+        test) are counted in :attr:`overflow` — where the chip's 24-bit ``u`` would wrap
+        and its ``v`` saturate (and a saturated ``v`` fire); the engine keeps computing
+        in ``int64``.
 
     Notes
     -----
@@ -75,8 +81,10 @@ class LiveNeurons:
     [([], 0.375), ([], 0.75), ([0], 0.125), ([], 0.5)]
     """
 
-    def __init__(self, params: StepParams, n: int) -> None:
+    def __init__(self, params: StepParams, n: int, state_limit: int | None = None) -> None:
         self.params = params
+        self.state_limit = state_limit
+        self.overflow = 0  # neuron-steps with u or v beyond ±state_limit
         integer = params.integer
         dtype = np.int64 if integer else np.float64
         self.u = np.zeros(n, dtype)
@@ -136,9 +144,17 @@ class LiveNeurons:
             self.u.fill(0)
             self._u_zero = True
         self._update_v(t)
+        if self.state_limit is not None:
+            self._count_overflow()
         if not self._spiking_on[t] or self._clean:
             return _NO_SPIKES
         return self._fire()
+
+    def _count_overflow(self) -> None:
+        """Count the neurons whose ``u`` or ``v`` left ``±state_limit`` this step."""
+        limit = self.state_limit
+        out = (self.u > limit) | (self.u < -limit) | (self.v > limit) | (self.v < -limit)
+        self.overflow += int(np.count_nonzero(out))
 
     def _scratch_buffer(self) -> np.ndarray:
         if self._scratch is None:

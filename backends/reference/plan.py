@@ -70,6 +70,13 @@ class SimPlan:
         return self.arithmetic == "int64"
 
     @property
+    def state_limit(self) -> int | None:
+        """The chip's state range ``2^(state_bits−1) − 1`` in state units, for a network
+        quantized for a target with ``state_bits`` (else ``None``)."""
+        bits = self.network.meta.get("state_bits")
+        return (1 << (int(bits) - 1)) - 1 if bits else None
+
+    @property
     def populations(self) -> Mapping[str, Population]:
         """Populations by id."""
         return self.network.population

@@ -85,6 +85,12 @@ class ProgramResult:
         return {k: v for s in self.simulations for k, v in s.clipped.items()}
 
     @property
+    def state_overflow(self) -> dict[str, int]:
+        """Per population of every segment, neuron-steps beyond the chip's state range
+        (:attr:`SimResult.state_overflow`)."""
+        return {k: v for s in self.simulations for k, v in s.state_overflow.items()}
+
+    @property
     def total_spikes(self) -> int:
         """Spikes of every population of every segment."""
         return sum(s.total_spikes for s in self.simulations)

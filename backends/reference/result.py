@@ -25,6 +25,9 @@ class Activity:
         Per projection, spikes delivered × synapses reached (over the batch).
     rasters : dict or None
         Per population, ``(n_frames, n_steps, size)`` bool spikes, when recorded.
+    overflow : dict
+        Per population, neuron-steps with ``u`` or ``v`` beyond the chip's state range
+        (the step engine; populations without any left out).
     """
 
     first_spike: dict[str, np.ndarray]
@@ -32,6 +35,7 @@ class Activity:
     membrane: dict[str, np.ndarray]
     synaptic_events: dict[str, int]
     rasters: dict[str, np.ndarray] | None = None
+    overflow: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +66,12 @@ class SimResult:
     clipped : dict of str to int
         Per input port, how many values were outside the encoder's range and
         clipped (``out_of_range="clip"``; ports without any are left out).
+    state_overflow : dict of str to int
+        Per population, neuron-steps whose ``u`` or ``v`` left the chip's state range
+        ``±(2^(state_bits−1) − 1)`` (a network quantized for a target with
+        ``state_bits``): there the chip's ``u`` wraps and its ``v`` saturates (and a
+        saturated ``v`` fires) while this engine computes wider. The step engine counts
+        every step; the closed form counts the final membranes only (a lower bound).
     """
 
     outputs: dict[str, np.ndarray]
@@ -74,6 +84,7 @@ class SimResult:
     n_steps: int
     n_frames: int
     clipped: dict[str, int] = field(default_factory=dict)
+    state_overflow: dict[str, int] = field(default_factory=dict)
 
     @property
     def total_spikes(self) -> int:
@@ -107,6 +118,8 @@ class SimResult:
         lines += [f"  output {k}: shape {v.shape}" for k, v in self.outputs.items()]
         lines += [f"  input {k}: {v} values outside the encoder's range, clipped"
                   for k, v in self.clipped.items()]
+        lines += [f"  population {k}: {v} neuron-steps beyond the chip's state range"
+                  for k, v in self.state_overflow.items()]
         return "\n".join(lines)
 
     @classmethod
@@ -140,4 +153,5 @@ class SimResult:
                 k: np.concatenate([r.spikes[k] for r in results]) for k in first.spikes},
             mode="+".join(dict.fromkeys(r.mode for r in results)), arithmetic=first.arithmetic,
             n_steps=first.n_steps, n_frames=sum(r.n_frames for r in results),
-            clipped={k: v for k, v in total("clipped").items() if v})
+            clipped={k: v for k, v in total("clipped").items() if v},
+            state_overflow={k: v for k, v in total("state_overflow").items() if v})

@@ -207,4 +207,15 @@ def simulate(
         n_steps=network.n_steps,
         n_frames=n_frames,
         clipped=clipped,
+        state_overflow=_overflow(plan, act),
     )
+
+
+def _overflow(plan, act) -> dict[str, int]:
+    """Neuron-steps beyond the chip's state range: the step engine's count, or (closed
+    form, which does not step) the final membranes beyond it."""
+    limit = plan.state_limit
+    if limit is None or act.overflow:
+        return dict(act.overflow)
+    return {pid: n for pid, v in act.membrane.items()
+            if (n := int(np.count_nonzero(np.abs(v) > limit)))}

@@ -101,8 +101,9 @@ def run_step(
     n_steps = plan.network.n_steps
     pops = plan.populations
     size = {pid: pops[pid].size for pid in plan.order}
-    live = {pid: (LiveResonators if isinstance(plan.neurons[pid], ResonatorStepParams)
-                  else LiveNeurons)(plan.neurons[pid], n_frames * size[pid])
+    live = {pid: LiveResonators(plan.neurons[pid], n_frames * size[pid])
+            if isinstance(plan.neurons[pid], ResonatorStepParams)
+            else LiveNeurons(plan.neurons[pid], n_frames * size[pid], plan.state_limit)
             for pid in plan.neurons}
     empty = np.zeros(0, np.int64)
     ring = {pid: [empty] * plan.history[pid] for pid in plan.order}
@@ -176,6 +177,7 @@ def run_step(
         membrane={k: framed(s.v) for k, s in live.items()},
         synaptic_events=events,
         rasters=rasters,
+        overflow={k: s.overflow for k, s in live.items() if getattr(s, "overflow", 0)},
     )
 
 

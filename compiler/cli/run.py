@@ -59,6 +59,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(json.dumps({"mode": result.mode, "spikes": result.total_spikes,
                           "synaptic_events": result.total_synaptic_events,
                           "spike_counts": result.spike_counts, "clipped": result.clipped,
+                          "state_overflow": result.state_overflow,
                           "outputs": {k: list(np.shape(v)) for k, v in result.outputs.items()}},
                          sort_keys=True))
     elif not args.quiet:

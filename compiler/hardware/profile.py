@@ -27,15 +27,17 @@ ir.errors.CompileError: file 'mine.yaml': missing profile fields cores_per_chip,
 neurons_per_core, input_axons_per_core, output_axons_per_core, synapse_memory_bits_per_core, \
 bits_per_synapse, weight_bits, threshold_bits, weight_exponent_max, threshold_mantissa_bits, \
 threshold_shift, bias_mantissa_bits, bias_exponent_max, state_bits, graded_spike_bits, \
-per_neuron_scales, delay_bits, max_steps_per_frame, time_step_s, shared_weights_per_core; \
-give each (null = unbounded), or 'unbounded: true' to leave budgets out on purpose
+per_neuron_scales, delay_bits, max_steps_per_frame, time_step_s, shared_weights_per_core, \
+current_decay_offset_lsb, full_voltage_decay, reset, fire_once, threshold_schedule, \
+input_gate, resonate_and_fire; give each (null = unbounded), or 'unbounded: true' to leave \
+budgets out on purpose
 """
 
 from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
@@ -111,7 +113,8 @@ class HardwareProfile(BaseModel):
     bias_mantissa_bits, bias_exponent_max : int or None, int
         Biases are a signed mantissa of that width times ``2^e``, ``0 ≤ e ≤ max``.
     state_bits : int or None
-        Signed width of the neuron state ``u``, ``v`` (documented; not simulated).
+        Signed width of the neuron state ``u``, ``v`` in state units (not wrapped or
+        saturated by the simulator: a run counts the states beyond it).
     graded_spike_bits : int or None
         Payload width of graded spikes (``None``: binary spikes only).
     per_neuron_scales : bool
@@ -126,6 +129,23 @@ class HardwareProfile(BaseModel):
     shared_weights_per_core : bool
         Whether a core stores a shared matrix or stencil kernel once for all the
         neurons it holds, instead of once per neuron/repetition.
+    current_decay_offset_lsb : int
+        The current decay the chip adds to every ``du``, in ``1/4096`` per step (Loihi 1:
+        1, so ``du = 0``, a non-leaking current, does not exist).
+    full_voltage_decay : bool
+        Whether ``dv = 1`` (a membrane that forgets every step) exists (Loihi 1: the 12-bit
+        ``dv`` register stops at 4095).
+    reset : {"zero", "subtract", "programmable"}
+        What a spike does to the membrane: ``v = 0`` only, ``v -= θ`` only, or any reset
+        of the neuron model (``value``, ``subtract``, ``fire_once``).
+    fire_once : {"none", "programmable"}
+        Whether a neuron can be silenced for the rest of the frame after its spike.
+    threshold_schedule : bool
+        Whether spiking can be switched on or off between phases of a run.
+    input_gate : bool
+        Whether the synaptic input can be cut for a phase (spikes arriving then dropped).
+    resonate_and_fire : bool
+        Whether the chip has resonate-and-fire neurons (the ``resonator`` motif).
     chip_profile : str or None
         For a board: the chip profile it is made of (its per-core budgets and formats).
     inter_chip_bandwidth_bit_s : float or None
@@ -165,6 +185,13 @@ class HardwareProfile(BaseModel):
     max_steps_per_frame: _Count = Field(default=None, ge=1)
     time_step_s: float | None = Field(default=None, gt=0)
     shared_weights_per_core: _Bool = False
+    current_decay_offset_lsb: _Int = Field(default=0, ge=0, le=4096)
+    full_voltage_decay: _Bool = True
+    reset: Literal["zero", "subtract", "programmable"] = "programmable"
+    fire_once: Literal["none", "programmable"] = "programmable"
+    threshold_schedule: _Bool = True
+    input_gate: _Bool = True
+    resonate_and_fire: _Bool = True
     chip_profile: str | None = None
     inter_chip_bandwidth_bit_s: float | None = Field(default=None, gt=0)
     inter_chip_latency_s: float | None = Field(default=None, ge=0)

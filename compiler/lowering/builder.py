@@ -119,6 +119,10 @@ class NetworkBuilder:
         """Whether nothing has been added yet."""
         return not self._pops
 
+    def populations_of(self, node: str) -> list[Population]:
+        """The populations lowered for IR node ``node`` so far."""
+        return [p for p in self._pops.values() if p.origin.get("node") == node]
+
     @property
     def input_ports(self) -> list[str]:
         """Encoder ports so far."""

@@ -12,7 +12,9 @@ projections:
   cell) whose per-neuron weight carries the clip-edge renormalisation.
 
 OS-CFAR (``kind: os``)
-    IF neuron (``du = 1``, ``dv = 0``, fire-once, ``v_th = 1``, always listening);
+    IF neuron (``du = 1``, ``dv = 0``, fire-once, ``v_th = 1``, always listening; on a
+    target without fire-once a reset to 0, which is the same here: every input cell spikes
+    once and only the CUT weight is positive, so after the spike the membrane only falls);
     training weight ``−1``; CUT weight ``k_eff + 1/2`` (``k_eff`` on a target with integer
     weights, where no float tie exists) with delay ``D``; log latency
     code in which ``α`` is the delay ``D``.  Fires when the CUT spike arrives iff
@@ -149,7 +151,10 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
     if op.kind == "os":
         code, cut_delay, train_delay, info = os_log_code(
             lo, hi, alpha=alpha, n_steps=n_steps, ties=ctx.settings_of(CfarOptions).cfar_ties)
-        params = NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="fire_once")
+        # each input cell spikes once and only the CUT's weight is positive: after its spike
+        # the membrane only falls, so a reset to 0 is fire-once (stock neurons: no fire-once)
+        stock = getattr(ctx.target, "fire_once", "programmable") == "none"
+        params = NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="value" if stock else "fire_once")
         # integer targets: the membrane k_eff − B is a whole number, so k_eff itself decides
         # exactly (B <= k_eff − 1) and the quantize pass can store it without rounding
         integer = getattr(ctx.target, "weight_bits", None) is not None

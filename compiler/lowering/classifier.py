@@ -74,6 +74,25 @@ def neuron_params(dynamics: LayerDynamics) -> NeuronParams:
         fields["phases"] = (Phase(start_step=0, spiking_on=False),)
     return NeuronParams(**fields)
 
+def _no_memory(params: NeuronParams, w_min: float, target) -> NeuronParams:
+    """``dv = 0`` for a memoryless (``dv = 1``) IF neuron on a target without ``dv = 1``,
+    where it changes nothing: every weight is at least the threshold and the reset is to 0,
+    so after each step the membrane is 0 (no input, or a spike and its reset).
+
+    Examples
+    --------
+    >>> from compiler.hardware import load_profile
+    >>> _no_memory(RELAY, 1.0, load_profile("loihi")).dv, _no_memory(RELAY, 0.5, None).dv
+    (0.0, 1.0)
+    """
+    stock = getattr(target, "full_voltage_decay", True)
+    if (stock or params.dv != 1.0 or params.du != 1.0 or params.reset != "value"
+            or params.v_reset != 0.0 or w_min < params.v_th or len(params.phases) > 1
+            or params.phases[0].bias != 0.0):
+        return params
+    return params.model_copy(update={"dv": 0.0})
+
+
 def _check(node: str, op: Classifier) -> float:
     if not op.layers:
         raise CompileError(f"node {node!r} (classifier): an opaque classifier (no layers) "
@@ -124,7 +143,8 @@ def lower_classifier(ctx: LoweringContext, node: str, op: Classifier,
     src = ctx.encode(value, consumer=node, code=code, motif=MOTIF)
     b = ctx.builder()
     relay_shape = {**{a: n for a, n in t.axes.items() if a != op.time_axis}, LEVEL_AXIS: 1}
-    prev = b.population(node, "input", relay_shape, RELAY, motif=MOTIF)
+    prev = b.population(node, "input", relay_shape, _no_memory(RELAY, 1.0, ctx.target),
+                        motif=MOTIF)
     b.matrix(node, "frames", src.id, prev.id, contract=(op.time_axis,), produce=(LEVEL_AXIS,),
              motif=MOTIF, rows=np.arange(frames), cols=np.zeros(frames, np.int64),
              values=np.ones(frames), n_in_out=(frames, 1), delays=np.arange(frames))
@@ -132,8 +152,10 @@ def lower_classifier(ctx: LoweringContext, node: str, op: Classifier,
     for k, plan in enumerate(plans):
         last = k == len(plans) - 1
         axes = _axes(plan, batch, last)
-        pop = b.population(node, "out" if last else f"l{plan.index}", axes,
-                           neuron_params(plan.params),
+        params = neuron_params(plan.params)
+        if plan.matrix.nnz and plan.recurrent is None:
+            params = _no_memory(params, float(plan.matrix.data.min()), ctx.target)
+        pop = b.population(node, "out" if last else f"l{plan.index}", axes, params,
                            motif=MOTIF)
         produce = tuple(a for a in axes if a not in batch)
         b.matrix(node, f"w{plan.index}", prev.id, pop.id, contract=contract, produce=produce,

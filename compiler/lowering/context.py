@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
+from compiler.hardware.neuron_features import check_population
 from compiler.lowering.builder import NetworkBuilder
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.values import HostValue, SpikeValue, Value
@@ -223,7 +224,20 @@ def lower_graph(ctx: LoweringContext) -> list[Segment]:
                 ctx.values[node] = rule(ctx, node, op, inputs)
             except ValidationError as err:  # a derived value no code or neuron can hold
                 raise CompileError(_invalid_build(ctx, node, motif, err), node=node) from None
+            _check_features(ctx, node)
     return ctx.segments()
+
+
+def _check_features(ctx: LoweringContext, node: str) -> None:
+    """Refuse ``node``'s populations where the target's stock neurons lack what they need
+    (:mod:`compiler.hardware.neuron_features`)."""
+    if ctx.target is None:
+        return
+    user = node.split("__")[0]  # the user's node (static-split parts share its id)
+    fix = f"use a target whose neurons have it (loihi2) or motifs={{{user!r}: 'host'}}"
+    for opened in ctx._opens():
+        for pop in opened.builder.populations_of(node):
+            check_population(pop, ctx.target, fix=fix)
 
 
 def _invalid_build(ctx: LoweringContext, node: str, motif: str, err: ValidationError) -> str:

@@ -319,6 +319,8 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     out = replace(net, populations=new_pops, projections=projections,
                   decoders=[_rescaled(d, units) for d in net.decoders])
     out.meta = {**net.meta, "quantized_for": profile.name}
+    if profile.state_bits is not None:  # the simulator counts states beyond it
+        out.meta["state_bits"] = profile.state_bits
     return out, record
 
 

@@ -1,8 +1,9 @@
 r"""Relay chains: delays beyond a target's maximum through copies of the source population.
 
 A relay population copies the source (one neuron per source neuron, weight 1, threshold
-1, instantaneous current, reset by subtraction, so it re-emits every spike exactly ``D``
-steps later) and the synapse keeps the remaining ``d - D``; a delay of ``d`` needs
+1, instantaneous current, reset by subtraction — or to 0 on a target whose stock neurons
+only reset to 0: its membrane is 0 or 1, so both resets leave 0 — so it re-emits every spike
+exactly ``D`` steps later) and the synapse keeps the remaining ``d - D``; a delay of ``d`` needs
 ``ceil(d / D) - 1`` relay stages (shared by every projection from that source).
 """
 
@@ -28,9 +29,10 @@ LongDelays = Literal["error", "relay"]
 #: Most relay stages one long delay may need (a 6-bit target: delays up to ~64 k steps).
 MAX_RELAY_STAGES = 1024
 
-def _relay_population(src: Population, stage: int) -> Population:
+def _relay_population(src: Population, stage: int, profile: HardwareProfile) -> Population:
+    reset = "value" if profile.reset == "zero" else "subtract"
     return Population(id=f"{src.id}__relay{stage}", shape=dict(src.shape),
-                      params=NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="subtract"),
+                      params=NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset=reset),
                       origin={**src.origin, "motif": "delay_relay"})
 
 
@@ -106,7 +108,7 @@ def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_de
         key = (p.source.split("__relay")[0], stage + 1)
         if key not in relays:
             src = pops[key[0]]
-            relays[key] = _relay_population(src, stage + 1)
+            relays[key] = _relay_population(src, stage + 1, profile)
             new_pops.append(relays[key])
             projs.append(_relay_link(p.source, relays[key], src.axes[0], limit, p.origin))
             if record is not None:
