@@ -107,11 +107,14 @@ def test_dsp_cycles_by_hand():
 def test_measured_counts_replace_the_bounds():
     from radarsnn import compile_graph
 
+    # an OS-CFAR: a motif loihi's stock neurons run (its DFT motifs are refused there)
     g = Graph.from_dict({"name": "r", "nodes": [
-        {"id": "x", "op": "input", "shape": {"sample": 16}},
-        {"id": "f", "op": "dft", "input": "x", "axis": "sample", "out_axis": "range"},
+        {"id": "x", "op": "input", "shape": {"range": 64}, "domain": "power"},
+        {"id": "f", "op": "cfar", "input": "x", "kind": "os", "axes": ["range"], "guard": [1],
+         "train": [4], "alpha": 4.0, "k": 6},
         {"id": "o", "op": "output", "input": "f"}]})
-    x = np.random.default_rng(0).normal(size=(6, 16))
+    x = np.random.default_rng(0).exponential(size=(6, 64))
+    x[:, 20] += 40.0
     rep = compile_graph(g, "loihi", calibration_inputs={"x": x}, accuracy="warn").records.report
     (row,) = rep.data["stages"]
     (s,) = rep.data["energy"]["stages"]
