@@ -163,3 +163,31 @@ def test_the_cli_measures_with_calibration_frames_and_refuses_a_loss(tmp_path, c
     assert not (tmp_path / "b").exists()
     assert main([*lossy, "--accuracy", "warn"]) == 0
     assert "warning: stage 'f__moving'" in capsys.readouterr().err
+
+
+def test_one_check_frame_with_a_frames_axis_is_scored_on_the_detector_axes():
+    # a single held-out frame keeps its frames axis (split_folds): the CFAR's window axes
+    # are then one further along, and a map is still one frame's [doppler, range] map
+    from compiler.accuracy.check import check_program
+    from compiler.accuracy.simulator import SimulatedFrames
+    from ir import evaluate
+
+    class Exact:
+        name = "exact"
+
+        def run(self, program, inputs):
+            return SimulatedFrames(values=evaluate(program.graph, inputs))
+
+    rng = np.random.default_rng(5)
+    power = rng.exponential(size=(16, 64))
+    power[4, 10] = power[9, 40] = 1e4
+    g = Graph.from_dict({"name": "ca", "nodes": [
+        {"id": "p", "op": "input", "shape": {"doppler": 16, "range": 64}, "domain": "power"},
+        {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
+         "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
+        {"id": "o", "op": "output", "input": "det"}]})
+    program = compile_graph(g, None, motifs={"det": "time"}, calibration_inputs={"p": power})
+    one = check_program(program, {"p": power}, Exact()).stages[0].figures
+    framed = check_program(program, {"p": power[None]}, Exact()).stages[0].figures
+    assert one["maps"] == framed["maps"] == 1
+    assert framed["objects"] == one["objects"] >= 2
