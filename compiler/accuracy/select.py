@@ -237,10 +237,14 @@ def _give_up(selection: Selection, programs: list, accuracy: str):
                 f"contract: {'; '.join(why)}")
     else:
         raise BudgetError(_deadline_message(programs[best], attempt))
-    tried = ", ".join(str(a.config) for a in selection.attempts)
+    if attempt.config:
+        tried = ", ".join(str(a.config) for a in selection.attempts)
+        how = (f"best of {len(selection.attempts)} configurations tried: {attempt.config}; "
+               f"tried {tried}")
+    else:  # every op pinned by the user: one configuration, nothing to climb
+        how = "with the motifs given; none left to choose"
     raise AccuracyError(
-        f"{what} (best of {len(selection.attempts)} configurations tried: {attempt.config}; "
-        f"tried {tried}). Ways out: keep that stage on the host (motifs={{{node!r}: 'host'}}), "
+        f"{what} ({how}). Ways out: keep that stage on the host (motifs={{{node!r}: 'host'}}), "
         f"more steps (time_steps=...), or accept the loss (accuracy='warn')", node=node)
 
 
