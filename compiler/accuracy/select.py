@@ -255,14 +255,28 @@ def _deadline_message(program, attempt: Attempt) -> str:
     period, total = lat["frame_period_s"], lat.get("total_s")
     over = f"{total:.3g} s per frame against a frame period of {period:.3g} s" \
         if total is not None else f"{lat['total_steps']} steps per frame"
+    stages = _stages_of(program, worst["network"])
     return (f"no spiking configuration that keeps the accuracy contract fits the frame "
             f"deadline: the best ({attempt.config}) needs {over}; network "
-            f"{worst['network']!r} alone runs {worst['runs']} time-multiplexed repetition(s) "
+            f"{worst['network']!r}" + (f" (stage {', '.join(map(repr, stages))})" if stages
+                                       else "")
+            + f" alone runs {worst['runs']} time-multiplexed repetition(s) "
             f"x {worst['time_steps']} steps = {worst['latency_steps']} steps"
             + (f" of {worst['step_s']:.3g} s" if worst.get("step_s") else "") + ". Ways out: a "
             "board profile with more cores (repetitions side by side), a lower frame rate "
             "(options={'frame_rate_hz': ...}), or keep a stage on the host "
             "(motifs={'dft': 'host'})")
+
+
+def _stages_of(program, network: str) -> list[str]:
+    """The user's nodes whose populations make up ``network`` (graph order; static-split
+    parts under their node's id; none: unknown)."""
+    nodes = {p.origin.get("node") for net in getattr(program, "networks", ())
+             if net.name == network for p in net.populations}
+    if not nodes:
+        return []
+    ids = [n.split("__")[0] for n in program.graph.topological_order() if n in nodes]
+    return list(dict.fromkeys(ids))
 
 
 def ops_to_search(graph, pinned: Mapping[str, str]) -> list[str]:
