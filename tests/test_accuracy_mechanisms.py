@@ -6,8 +6,10 @@ configuration that loses the data and ``accuracy="error"``: the compile raises
 ``accuracy="warn"`` keeps the configuration and records the figure in the program; the
 default (``motifs="auto"``) holds or climbs to a configuration that does.
 
-1. the time-coded S-FT's constant read-out code (range DFT) decodes the noise floor to 0;
-2. the time-coded Doppler read-out on a target without graded spikes does the same;
+1. the time-coded S-FT's constant read-out code (range DFT) decodes the noise floor to 0
+   (half of the cells of a profile spanning ~57 dB);
+2. the time-coded Doppler S-FT on a target without graded spikes does the same to a map
+   spanning ~68 dB (the range DFT on the resonator, which holds);
 3. the S-FT's input time code on a 1-D chirp sequence without the static split: its step
    lifts the range profile's noise floor (leakage sets the code's scale);
 4. the resonator's linear time read-out, scaled per bin on the calibration frames, clips
