@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -200,3 +202,28 @@ def test_a_deadline_refusal_names_the_stage_of_the_slowest_network():
                                           r"alone runs 1 .* x 320 steps"):
         compile_graph(RD, "spinnaker2", calibration_inputs={"x": _frames(3, 0)},
                       simulator=ReferenceSimulator())
+
+
+def test_the_cli_summary_says_which_stage_the_search_kept_on_the_host(tmp_path, capsys):
+    from compiler.cli import main
+
+    rng = np.random.default_rng(3)
+    maps = rng.exponential(size=(3, 16, 64)) * 1e6
+    for f in range(3):
+        for _ in range(3):
+            maps[f, rng.integers(16), rng.integers(64)] *= 10 ** rng.uniform(2, 6)
+    g = Graph.from_dict({"name": "ca", "nodes": [
+        {"id": "p", "op": "input", "shape": {"doppler": 16, "range": 64}, "domain": "power"},
+        {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
+         "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
+        {"id": "o", "op": "output", "input": "det"}]})
+    chain, frames = tmp_path / "ca.yaml", tmp_path / "p.npy"
+    chain.write_text(g.to_yaml())
+    np.save(frames, maps)
+    argv = ["compile", str(chain), "-c", str(frames), "-o", str(tmp_path / "a")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert ("on the host: cfar (no spiking configuration kept the contract: time, "
+            "time(cfar_steps=300))") in out
+    assert main([*argv[:-1], str(tmp_path / "b"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["host_ops"] == ["cfar"]
