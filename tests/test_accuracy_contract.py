@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -177,3 +179,65 @@ def test_the_cli_measures_with_calibration_frames_and_refuses_a_loss(tmp_path, c
     assert not (tmp_path / "b").exists()
     assert main([*lossy, "--accuracy", "warn"]) == 0
     assert "warning: stage 'f__moving'" in capsys.readouterr().err
+
+
+def test_one_check_frame_with_a_frames_axis_is_scored_on_the_detector_axes():
+    # a single held-out frame keeps its frames axis (split_folds): the CFAR's window axes
+    # are then one further along, and a map is still one frame's [doppler, range] map
+    from compiler.accuracy.check import check_program
+    from compiler.accuracy.simulator import SimulatedFrames
+    from ir import evaluate
+
+    class Exact:
+        name = "exact"
+
+        def run(self, program, inputs):
+            return SimulatedFrames(values=evaluate(program.graph, inputs))
+
+    rng = np.random.default_rng(5)
+    power = rng.exponential(size=(16, 64))
+    power[4, 10] = power[9, 40] = 1e4
+    g = Graph.from_dict({"name": "ca", "nodes": [
+        {"id": "p", "op": "input", "shape": {"doppler": 16, "range": 64}, "domain": "power"},
+        {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
+         "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
+        {"id": "o", "op": "output", "input": "det"}]})
+    program = compile_graph(g, None, motifs={"det": "time"}, calibration_inputs={"p": power})
+    one = check_program(program, {"p": power}, Exact()).stages[0].figures
+    framed = check_program(program, {"p": power[None]}, Exact()).stages[0].figures
+    assert one["maps"] == framed["maps"] == 1
+    assert framed["objects"] == one["objects"] >= 2
+
+
+def test_a_deadline_refusal_names_the_stage_of_the_slowest_network():
+    # spinnaker2's 1 ms steps: the resonator DFTs keep the contract but not 10 frames/s
+    with pytest.raises(BudgetError, match=r"frame deadline: .* 0\.584 s per frame against a "
+                                          r"frame period of 0\.1 s; network 'rd' \(stage 'f'\) "
+                                          r"alone runs 1 .* x 320 steps"):
+        compile_graph(RD, "spinnaker2", calibration_inputs={"x": _frames(3, 0)},
+                      simulator=ReferenceSimulator())
+
+
+def test_the_cli_summary_says_which_stage_the_search_kept_on_the_host(tmp_path, capsys):
+    from compiler.cli import main
+
+    rng = np.random.default_rng(3)
+    maps = rng.exponential(size=(3, 16, 64)) * 1e6
+    for f in range(3):
+        for _ in range(3):
+            maps[f, rng.integers(16), rng.integers(64)] *= 10 ** rng.uniform(2, 6)
+    g = Graph.from_dict({"name": "ca", "nodes": [
+        {"id": "p", "op": "input", "shape": {"doppler": 16, "range": 64}, "domain": "power"},
+        {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
+         "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
+        {"id": "o", "op": "output", "input": "det"}]})
+    chain, frames = tmp_path / "ca.yaml", tmp_path / "p.npy"
+    chain.write_text(g.to_yaml())
+    np.save(frames, maps)
+    argv = ["compile", str(chain), "-c", str(frames), "-o", str(tmp_path / "a")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert ("on the host: cfar (no spiking configuration kept the contract: time, "
+            "time(cfar_steps=300))") in out
+    assert main([*argv[:-1], str(tmp_path / "b"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["host_ops"] == ["cfar"]

@@ -60,8 +60,9 @@ def check_program(program, inputs: Mapping[str, np.ndarray], simulator: Simulato
     Contract
     """
     graph = program.graph
-    count = n_frames(graph.infer_types(), inputs, f"program {graph.name!r}") or 1
+    count = n_frames(graph.infer_types(), inputs, f"program {graph.name!r}")
     run = simulator.run(program, inputs) if run is None else run
     reference = evaluate(graph, inputs, registry=program.evaluators)
-    return measure_contract(program, run.values, reference, run.clipped, n_frames=count,
-                            tolerances=tolerances, held_out=held_out, note=note)
+    return measure_contract(program, run.values, reference, run.clipped, n_frames=count or 1,
+                            framed=count is not None, tolerances=tolerances,
+                            held_out=held_out, note=note)

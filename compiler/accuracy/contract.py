@@ -196,8 +196,9 @@ def _axes_of(graph, node: str, frames: bool) -> tuple[int, ...]:
 
 def measure_contract(program, values: Mapping[str, np.ndarray],
                      reference: Mapping[str, np.ndarray], clipped: Mapping[str, int], *,
-                     n_frames: int, tolerances: Tolerances | None = None,
-                     held_out: bool = True, note: str = "") -> Contract:
+                     n_frames: int, framed: bool | None = None,
+                     tolerances: Tolerances | None = None, held_out: bool = True,
+                     note: str = "") -> Contract:
     """Every decoded node of every spiking segment against the golden values.
 
     Parameters
@@ -210,7 +211,10 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
     clipped : mapping of str to int
         Values clipped per encoder port (an IR node id) on those frames.
     n_frames : int
-        Frames checked (a leading frames axis when more than one).
+        Frames checked.
+    framed : bool, optional
+        Whether the arrays carry a leading frames axis (default: ``n_frames > 1``; a
+        single check frame cut from a stack keeps its axis of length 1).
     tolerances : Tolerances, optional
         The contract (default :class:`Tolerances`).
     held_out, note : bool, str
@@ -223,7 +227,7 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
     tol = tolerances or Tolerances()
     graph = program.graph
     motifs = dict(program.records.motifs)
-    framed = n_frames > 1
+    framed = n_frames > 1 if framed is None else bool(framed)
     stages = []
     for seg in program.segments:
         if seg.kind != "spiking":

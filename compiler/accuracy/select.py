@@ -249,10 +249,14 @@ def _give_up(selection: Selection, programs: list, accuracy: str,
                 f"contract: {'; '.join(why)}")
     else:
         raise BudgetError(_deadline_message(programs[best], attempt))
-    tried = ", ".join(str(a.config) for a in selection.attempts)
+    if attempt.config:
+        tried = ", ".join(str(a.config) for a in selection.attempts)
+        how = (f"best of {len(selection.attempts)} configurations tried: {attempt.config}; "
+               f"tried {tried}")
+    else:  # every op pinned by the user: one configuration, nothing to climb
+        how = "with the motifs given; none left to choose"
     raise AccuracyError(
-        f"{what} (best of {len(selection.attempts)} configurations tried: {attempt.config}; "
-        f"tried {tried}). Ways out: keep that stage on the host (motifs={{{node!r}: 'host'}}), "
+        f"{what} ({how}). Ways out: keep that stage on the host (motifs={{{node!r}: 'host'}}), "
         f"more steps (time_steps=...), or accept the loss (accuracy='warn')", node=node)
 
 
@@ -263,14 +267,28 @@ def _deadline_message(program, attempt: Attempt) -> str:
     period, total = lat["frame_period_s"], lat.get("total_s")
     over = f"{total:.3g} s per frame against a frame period of {period:.3g} s" \
         if total is not None else f"{lat['total_steps']} steps per frame"
+    stages = _stages_of(program, worst["network"])
     return (f"no spiking configuration that keeps the accuracy contract fits the frame "
             f"deadline: the best ({attempt.config}) needs {over}; network "
-            f"{worst['network']!r} alone runs {worst['runs']} time-multiplexed repetition(s) "
+            f"{worst['network']!r}" + (f" (stage {', '.join(map(repr, stages))})" if stages
+                                       else "")
+            + f" alone runs {worst['runs']} time-multiplexed repetition(s) "
             f"x {worst['time_steps']} steps = {worst['latency_steps']} steps"
             + (f" of {worst['step_s']:.3g} s" if worst.get("step_s") else "") + ". Ways out: a "
             "board profile with more cores (repetitions side by side), a lower frame rate "
             "(options={'frame_rate_hz': ...}), or keep a stage on the host "
             "(motifs={'dft': 'host'})")
+
+
+def _stages_of(program, network: str) -> list[str]:
+    """The user's nodes whose populations make up ``network`` (graph order; static-split
+    parts under their node's id; none: unknown)."""
+    nodes = {p.origin.get("node") for net in getattr(program, "networks", ())
+             if net.name == network for p in net.populations}
+    if not nodes:
+        return []
+    ids = [n.split("__")[0] for n in program.graph.topological_order() if n in nodes]
+    return list(dict.fromkeys(ids))
 
 
 def ops_to_search(graph, pinned: Mapping[str, str]) -> list[str]:

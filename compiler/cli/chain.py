@@ -23,8 +23,8 @@ from compiler.cli.arrays import (
 from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
 
-__all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "load_arrays", "parse_options",
-           "read_npy", "write_output"]
+__all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "host_fallback_line", "load_arrays",
+           "parse_options", "read_npy", "write_output"]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -267,7 +267,9 @@ def _cmd_compile(args: argparse.Namespace) -> int:
                           "totals": totals,
                           "latency": _latency_summary(report),
                           "energy": _energy_summary(report),
-                          "accuracy": program.records.accuracy.to_dict()},
+                          "accuracy": program.records.accuracy.to_dict(),
+                          "host_ops": (program.records.extra.get("motif_selection")
+                                       or {}).get("host_ops", [])},
                          sort_keys=True, default=str))
         return 0
     if not args.quiet:
@@ -282,8 +284,34 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         contract = program.records.accuracy
         if hasattr(contract, "lines"):  # measured: the accuracy contract per stage
             print("\n".join(f"  {line}" for line in contract.lines()))
+        fallback = host_fallback_line(program.records.extra.get("motif_selection"))
+        if fallback:
+            print(f"  {fallback}")
         print(f"  {note}; full report: {folder / 'report.md'}")
     return 0
+
+
+def host_fallback_line(selection: dict | None) -> str | None:
+    """The summary's line for ops the search kept on the host (None: every op spiking).
+
+    Examples
+    --------
+    >>> host_fallback_line({"host_ops": ["cfar"], "chosen": 2, "attempts": [
+    ...     {"config": {"cfar": "time"}}, {"config": {"cfar": "time(cfar_steps=300)"}},
+    ...     {"config": {"cfar": "host"}}]})
+    'on the host: cfar (no spiking configuration kept the contract: time, time(cfar_steps=300))'
+    >>> host_fallback_line({"host_ops": [], "attempts": []}) is None
+    True
+    """
+    if not selection or not selection.get("host_ops"):
+        return None
+    parts = []
+    for op in selection["host_ops"]:
+        tried = [a["config"][op] for a in selection["attempts"]
+                 if a["config"].get(op, "host") != "host"]
+        parts.append(f"{op} (no spiking configuration kept the contract: "
+                     f"{', '.join(dict.fromkeys(tried))})")
+    return "on the host: " + "; ".join(parts)
 
 
 def _latency_summary(report) -> dict:

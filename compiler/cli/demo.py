@@ -53,8 +53,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="scene noise seed (default 0)")
     p.add_argument("--preset", action="append", choices=["seed003", "carrada"],
                    help="radar preset(s) to run (default: both)")
-    p.add_argument("--target", "-t", default="loihi2",
-                   help="chip profile of the spiking chain (default loihi2)")
+    p.add_argument("--target", "-t", default="kapoho_point",
+                   help="profile or board of the spiking chain (default kapoho_point: 8 Loihi 2 "
+                        "chips; on one loihi2 chip the carrada chain does not fit 10 frames/s)")
     p.add_argument("--out", type=Path, default=Path("radarsnn-demo"), metavar="DIR",
                    help="where figures and summary.md go (default ./radarsnn-demo)")
     p.add_argument("--no-figures", action="store_true", help="write no files")

@@ -5,7 +5,8 @@ raster: each neuron spikes at most once per window.  Every population with a
 spike is one panel, in pipeline order, all on one shared time axis — steps
 within the network's window below, microseconds above (the target's step
 duration) — and each panel shows its neurons by *bin*: one axis of the
-population (``range``, else ``sample``, else its last axis) on the y axis, the
+population (``range``, else ``sample``, else ``bit`` — the bit planes of a resonator's
+stream code — else its last axis) on the y axis, the
 other axes fixed at one index each (the first target's bin on ``doppler`` and
 ``range``, else the index with the most spikes), named in the panel's title.  A
 population that spiked nowhere (a graded read-out sends membranes as payloads)
@@ -30,11 +31,12 @@ __all__ = ["bin_axis", "slice_of", "spike_figure", "spike_times"]
 #: Resolution of the figure and the PNG.
 DPI = 110
 #: The axis a panel shows its neurons along, in order of preference.
-BIN_AXES = ("range", "sample")
+BIN_AXES = ("range", "sample", "bit")
 
 
 def bin_axis(shape: dict[str, int]) -> str:
-    """The axis whose bins a population's panel shows (``range``, ``sample``, else the last)."""
+    """The axis whose bins a population's panel shows (the first of :data:`BIN_AXES`, else
+    the last)."""
     return next((a for a in BIN_AXES if a in shape), list(shape)[-1])
 
 

@@ -1,9 +1,14 @@
 """One demo scene: conventional and spiking range-Doppler-CFAR chains side by side.
 
-For a radar preset: simulate its scene (seeded) and a second frame for
+For a radar preset: simulate its scene (seeded) and three other frames for
 calibration, build :func:`compiler.chains.range_doppler_chain`, evaluate it
 with the reference interpreter (the conventional chain), compile it for the
-target and run it on the reference simulator (the spiking chain), then score
+target as a user's compile does — measured: the last calibration frame is held
+back, every spiking stage is checked on it against the conventional chain and the
+motifs are chosen to keep the contract and the frame deadline (``motifs="auto"``,
+docs/accuracy.md) — and run it on the reference simulator (the spiking chain); a
+target on which nothing holds or fits is reported with the compiler's typed error
+(naming the stage, or the network and its steps). Then score
 both against the ground truth (:mod:`compiler.demo.matching`) and the spiking
 detections against the conventional ones cell by cell:
 
@@ -23,19 +28,23 @@ from typing import Any
 
 import numpy as np
 
-from backends.reference import run_program
+from backends.reference import ReferenceSimulator, run_program
 from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
 from compiler.demo.matching import score_peaks
 from compiler.lowering.dft_common import modulus_rmse
 from ir import evaluate
+from ir.errors import AccuracyError, BudgetError
 from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frame
 
 __all__ = ["SceneArrays", "SceneReport", "TargetRow", "run_scene"]
 
-#: Offset between a scene's seed and the seed of its calibration frame.
+#: Offset between a scene's seed and the seed of its first calibration frame.
 CALIBRATION_SEED_OFFSET = 1000
+
+#: Calibration frames (other noise seeds); the last is held back for the accuracy check.
+CALIBRATION_FRAMES = 3
 
 
 @dataclass
@@ -90,6 +99,12 @@ class SceneReport:
     resources: dict[str, Any] = field(default_factory=dict)
     timings_s: dict[str, float] = field(default_factory=dict)
     map_axes: tuple[str, ...] = ("doppler", "range")
+    accuracy: list[str] = field(default_factory=list)
+    """The compile's accuracy contract, one line per spiking stage (``Contract.lines``)."""
+    motifs: dict[str, str] = field(default_factory=dict)
+    """The motif chosen per node (``motifs="auto"``)."""
+    refused: str | None = None
+    """The compiler's typed error when no configuration holds or fits (nothing was run)."""
 
     @property
     def n_targets(self) -> int:
@@ -174,8 +189,8 @@ def lost_at(truth: tuple[int, int], conv_power: np.ndarray, spk_power: np.ndarra
             "peak there (the noise estimate of the spiking map differs)")
 
 
-def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: bool = True,
-              progress=None) -> tuple[SceneReport, SceneArrays]:
+def run_scene(name: str, seed: int, *, target: str | None = "kapoho_point",
+              spiking: bool = True, progress=None) -> tuple[SceneReport, SceneArrays]:
     """Run one preset's scene through the conventional (and spiking) chain and score it.
 
     Parameters
@@ -183,7 +198,8 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
     name : str
         A radar preset with a scene (``seed003``, ``carrada``).
     seed : int
-        Noise seed of the scene (the calibration frame uses ``seed + 1000``).
+        Noise seed of the scene (the calibration frames use ``seed + 1000`` …
+        ``seed + 1002``; the last is held back for the accuracy check).
     target : str or None
         Hardware profile to compile for (None: no allocation, no report).
     spiking : bool
@@ -214,14 +230,24 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
                          spiking_mask=None, truth_bins=truth,
                          truth_velocity_mps=[float(t.velocity_mps) for t in frame.truth],
                          truth_aliased=[bool(t.aliased) for t in frame.truth])
-    s_found = [None] * len(truth)
+    s_found, program = [None] * len(truth), None
     if spiking:
         t0 = time.perf_counter()
-        calibration = simulate_frame(config, scene, seed=seed + CALIBRATION_SEED_OFFSET).adc
-        program = compile_graph(graph, target, calibration_inputs={"adc": calibration},
-                                progress=progress)
+        seeds = range(seed + CALIBRATION_SEED_OFFSET,
+                      seed + CALIBRATION_SEED_OFFSET + CALIBRATION_FRAMES)
+        calibration = np.stack([simulate_frame(config, scene, seed=s).adc for s in seeds])
+        try:
+            program = compile_graph(graph, target, calibration_inputs={"adc": calibration},
+                                    simulator=ReferenceSimulator(), progress=progress)
+        except (AccuracyError, BudgetError) as err:  # what a user's compile says
+            program, report.refused = None, " ".join(str(err).split())
         timings["compile"] = time.perf_counter() - t0
-        say(name, f"compiled for {target}")
+        say(name, f"compiled for {target}" if program else f"refused for {target}")
+    if spiking and program is not None:
+        report.accuracy = program.records.accuracy.lines()
+        report.motifs = {n: str(m) for n, m in program.records.motifs.items()  # not the
+                         if program.graph.op(n).op in ("dft", "cfar") and "__static" not in n}
+        # static split's exact host copies
         t0 = time.perf_counter()
         # the scene frame may exceed the calibration frame's range by a few ADC codes: clip
         # (explicitly; the default policy refuses them)
@@ -271,7 +297,7 @@ def run_scene(name: str, seed: int, *, target: str | None = "loihi2", spiking: b
                   spiking_range_bin=None if s is None else s[0],
                   spiking_doppler_bin=None if s is None else s[1])
         for t, f, s in zip(frame.truth, c_score.found, s_found, strict=True)]
-    if spiking:
+    if spiking and program is not None:
         for row, tb in zip(report.targets, truth, strict=True):
             if row.found and not row.found_spiking:
                 row.lost_at = lost_at(tb, c_power, s_power, s_mask)
