@@ -238,6 +238,6 @@ def test_the_cli_summary_says_which_stage_the_search_kept_on_the_host(tmp_path, 
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert ("on the host: cfar (no spiking configuration kept the contract: time, "
-            "time(cfar_steps=300))") in out
+            "time(cfar_steps=300), time(cfar_steps=1000))") in out
     assert main([*argv[:-1], str(tmp_path / "b"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["host_ops"] == ["cfar"]

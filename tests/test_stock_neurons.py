@@ -189,7 +189,8 @@ def test_the_motif_search_skips_rungs_the_stock_lif_refuses() -> None:
                              options=dict(options))
 
     program, sel = search(["cfar"], build, lambda p: Contract(stages=[], n_frames=1))
-    assert [a.config["cfar"] for a in sel.attempts] == ["time", "time(cfar_steps=300)", "host"]
+    assert [a.config["cfar"] for a in sel.attempts] == ["time", "time(cfar_steps=300)",
+                                                       "time(cfar_steps=1000)", "host"]
     assert all("non-leaking current" in a.error for a in sel.attempts[:2])
     assert sel.host_ops == ["cfar"] and not program.networks
 

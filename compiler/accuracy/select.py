@@ -18,12 +18,13 @@ decodes the noise floor to 0 and an OS-CFAR floods; the resonator streams the AD
 samples with a bit-plane code and keeps the floor; held-out frames with stronger
 returns than the calibration set clip the input code unless its range has headroom
 (30 dB here, paid for with two more stream bits); the time-coded CFAR's ties need
-more than 100 steps on maps rich in near-threshold cells.
+more than 100 steps on maps rich in near-threshold cells (a CA-CFAR on dB maps held
+only at 1000).
 
 Examples
 --------
 >>> [c.label for c in LADDERS["cfar"]]
-['time', 'time(cfar_steps=300)', 'host']
+['time', 'time(cfar_steps=300)', 'time(cfar_steps=1000)', 'host']
 >>> Ladder(("dft", "cfar")).config([0, 2])
 ({'dft': 'time', 'cfar': 'host'}, {})
 """
@@ -59,7 +60,8 @@ class Candidate:
 LADDERS: dict[str, tuple[Candidate, ...]] = {
     "dft": (Candidate("time"), Candidate("time", (("charging", "log"),)), Candidate("resonator"),
             Candidate("resonator", (("encoder_headroom", 32.0), ("stream_bits", 14)))),
-    "cfar": (Candidate("time"), Candidate("time", (("cfar_steps", 300),)), Candidate("host")),
+    "cfar": (Candidate("time"), Candidate("time", (("cfar_steps", 300),)),
+             Candidate("time", (("cfar_steps", 1000),)), Candidate("host")),
 }
 
 #: Ops whose ladder may end on the host when no spiking rung keeps the contract (a CFAR:
