@@ -1,0 +1,112 @@
+"""The figures of docs/fourier.md's S-FT, magnitude, range-Doppler and S-FFT tables are the
+recorded output of ``python benchmarks/fourier.py --study time-coded --study fft``
+(``benchmarks/results/fourier.txt``), digit for digit.
+
+The run compiles and simulates dozens of networks (over a minute), so the tests compare the page
+with the record; the last one checks that the benchmark still prints those lines (its source).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGE = ROOT / "docs" / "fourier.md"
+RECORD = ROOT / "benchmarks" / "results" / "fourier.txt"
+
+
+def _table(head: str) -> list[list[str]]:
+    """The body rows (cells, ``*`` removed; ``\\|`` is no separator) of the page's table whose
+    header starts ``head``."""
+    text = PAGE.read_text(encoding="utf-8")
+    lines = text[text.index(head):].split("\n\n")[0].splitlines()[2:]
+    return [[c.strip().replace("*", "") for c in re.split(r"(?<!\\)\|", line.strip()[1:-1])]
+            for line in lines]
+
+
+def _record() -> str:
+    return RECORD.read_text(encoding="utf-8")
+
+
+def _spaced(n: int) -> str:
+    return f"{n:,}".replace(",", " ")
+
+
+def test_the_ti_rmse_table_is_the_recorded_one() -> None:
+    record, expected = _record(), []
+    for n in (256, 1024):
+        block = record.split(f"N = {n} ")[1].split("\n\n")[0]
+        for policy in ("static", "per-input"):
+            auto = re.search(rf"^\s*{policy} auto\s+(.+?)\s+\(auto picked: (K+)", block, re.M)
+            for schedule, name in (("constant", "constant"), ("companding", "companding (= auto)")):
+                values = re.search(rf"^\s*{policy} {schedule}\s+(.+)$", block, re.M).group(1)
+                if schedule == "companding":
+                    assert auto.group(1).split() == values.split()  # auto picked companding
+                expected.append([str(n), policy, name, *values.split()])
+    assert _table("| N | policy | schedule | T=32 |") == expected
+    static_256 = {int(r[0]): float(r[6]) for r in expected if r[1] == "static"
+                  and r[2] == "constant"}
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    assert (f"misses them at T = 256 ({static_256[256]:.5f} / {static_256[1024]:.5f} static)"
+            in text)
+    at_256 = {(r[0], r[1]): float(r[6]) for r in expected if r[2] != "constant"}
+    assert all(v <= (0.005 if p == "static" else 0.0025) for (_, p), v in at_256.items())
+    assert "static ≤ 0.005, per-input ≤ 0.0025 — met by the default" in text
+
+
+def test_the_magnitude_table_is_the_recorded_one() -> None:
+    record = _record()
+    errors = {m.group(1): f"{m.group(2)} / {m.group(3)}" for m in re.finditer(
+        r"^\s+(\w+) \(TI N=256, T=256, .*?= ([\d.]+), RMS = ([\d.]+)$", record, re.M)}
+    ratios = {m.group(1): f"[{m.group(2)}, {m.group(3)}]" for m in re.finditer(
+        r"^\s+(\w+): ratio to \|z\| in \[([\d.]+), ([\d.]+)\]", record, re.M)}
+    rows = {r[0].strip("`"): r for r in _table("| motif | computes | ratio to")}
+    assert rows["host"][3] == f"{errors['host']} (S-FT error only)"
+    for motif in ("l1", "amb"):
+        assert rows[motif][2:] == [ratios[motif], errors[motif]], motif
+
+
+def test_the_range_doppler_table_is_the_recorded_one() -> None:
+    recorded = [list(m.groups()) for m in re.finditer(
+        r"^\s+(\w+) T=(\d+)\s+(\w+): peak bin equal (\d+/\d+), within 1 bin (\d+/\d+), "
+        r"max \|normalised map error\| ([\d.]+)", _record(), re.M)]
+    assert len(recorded) == 18
+    assert _table("| preset | T | magnitude | same bin |") == recorded
+
+
+def test_the_sfft_tables_are_the_recorded_ones() -> None:
+    record = _record()
+    rows = _table("| N | radices | neurons (+1 clock) |")
+    counted = list(re.finditer(
+        r"^N=(\d+) radices \(([\d, ]+)\): compiled per instance (\d+) neurons \(\+1 clock\), "
+        r"(\d+) butterfly synapses \(per layer \[([\d, ]+)\].*?\+ (\d+) offset synapses, "
+        r"(\d+) steps; estimate (\d+), (\d+), (\d+)$", record, re.M))
+    assert len(rows) == len(counted) == 3
+    for row, m in zip(rows, counted, strict=True):
+        n, radices, neurons, total, layers, offsets, steps, *estimate = m.groups()
+        per_layer = ", ".join(_spaced(int(v)) for v in layers.split(", "))
+        assert row == [n, radices.replace(" ", ""), _spaced(int(neurons)),
+                       f"{per_layer} (Σ {_spaced(int(total))})", _spaced(int(offsets)), steps,
+                       ", ".join(_spaced(int(v)) for v in estimate)], n
+    accuracy = [list(m.groups()) for m in re.finditer(
+        r"^\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+True$", record, re.M)]
+    assert len(accuracy) == 6
+    assert _table("| N | T | S-FFT | dense S-FT") == accuracy
+    assert max(float(r[4]) for r in accuracy) < 1.5  # "within 1.5× of the dense S-FT"
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    assert "within 1.5× of the dense S-FT" in text
+    const = {r[0]: float(r[6]) for r in _table("| N | policy | schedule | T=32 |")
+             if r[1] == "static" and r[2] == "constant"}
+    sfft = {r[0]: float(r[2]) for r in accuracy if r[1] == "256"}
+    low, high = sorted(round(sfft[n] / const[n], 1) for n in ("256", "1024"))
+    assert f"N = 1024, T = 256, static: the S-FFT is {low}–{high}× that." in text
+    assert re.search(r"Table 3: 4 608, 37 888, 550\)$", record, re.M)
+
+
+def test_the_benchmark_still_prints_those_lines() -> None:
+    source = (ROOT / "benchmarks" / "fourier.py").read_text(encoding="utf-8")
+    for piece in ("auto picked", "ratio to |z| in", "max |err|/max|z|", "peak bin equal",
+                  "within 1 bin", "compiled per instance", "offset synapses", "closed==step",
+                  '"time-coded": time_coded_study', '"fft": fft_study'):
+        assert piece in source, piece
