@@ -110,3 +110,18 @@ def test_the_benchmark_still_prints_those_lines() -> None:
                   "within 1 bin", "compiled per instance", "offset synapses", "closed==step",
                   '"time-coded": time_coded_study', '"fft": fft_study'):
         assert piece in source, piece
+
+
+def test_the_rate_table_is_the_recorded_one() -> None:
+    """``python benchmarks/fourier.py --study rate`` (``fourier_rate.txt``, minutes)."""
+    record = (RECORD.parent / "fourier_rate.txt").read_text(encoding="utf-8")
+    recorded = [[form, _spaced(int(steps)), rmse, f"{secs} s", f"{rss} GB"]
+                for form, steps, rmse, limit, secs, rss in re.findall(
+                    r"^\s+(1D|2D)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)$",
+                    record, re.M)]
+    assert len(recorded) == 6
+    assert _table("| form | steps | RMSE | sim time | peak RSS |") == recorded
+    limits = {"1D": 0.0056, "2D": 0.0060}
+    assert all(float(r[2]) <= limits[r[0]] for r in recorded)  # "from 100 steps on"
+    assert "(paper: 0.0056 1D, 0.0060 2D at" in PAGE.read_text(encoding="utf-8")
+    assert "RMSE 0.0056 (1D), 0.0060 (2D) at 10 000 steps" in record
