@@ -125,3 +125,34 @@ def test_the_rate_table_is_the_recorded_one() -> None:
     assert all(float(r[2]) <= limits[r[0]] for r in recorded)  # "from 100 steps on"
     assert "(paper: 0.0056 1D, 0.0060 2D at" in PAGE.read_text(encoding="utf-8")
     assert "RMSE 0.0056 (1D), 0.0060 (2D) at 10 000 steps" in record
+
+
+def _md_rows(record: str, head: str) -> list[list[str]]:
+    lines = record[record.index(head):].split("\n\n")[0].splitlines()[2:]
+    return [[c.strip() for c in line.strip()[1:-1].split("|")] for line in lines]
+
+
+def test_the_resonator_tables_are_the_recorded_ones() -> None:
+    """``python benchmarks/resonator_accuracy.py`` (``resonator_accuracy.txt``, a minute)."""
+    record = (RECORD.parent / "resonator_accuracy.txt").read_text(encoding="utf-8")
+    ti = _md_rows(record, "| target | motif | read-out |")
+    page = [[c.replace(" (default)", "") for c in row]
+            for row in _table("| target | motif | read-out | steps |")]
+    assert page == ti
+    drift = _md_rows(record, "| coef bits | renorm |")
+    rows = _table("| coef bits | renorm | drift bound |")
+    assert len(rows) == len(drift) == 12
+    for row, rec in zip(rows, drift, strict=True):
+        assert row[0].split()[0] == rec[0].split()[0]
+        assert row[1] == rec[1].replace(": none", "")
+        assert row[2:] == rec[2:], rec[0]
+    loihi2 = {(r[1], r[2]): r for r in ti if r[0] == "loihi2"}
+    sft_graded, res_graded = loihi2[("time (S-FT)", "T=1024")], loihi2[("resonator", "graded")]
+    sft_256, res_256 = loihi2[("time (S-FT)", "T=1279")], loihi2[("resonator", "time T=256")]
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    assert (f"on loihi2 |X| RMSE {res_graded[5]} against {sft_graded[5]} (graded) and "
+            f"{res_256[5]} against {sft_256[5]} (T = 256), Re/Im RMSE {res_graded[6]} against "
+            f"{sft_graded[6]} and {res_256[6]} against {sft_256[6]}") in text
+    fewer = sorted(int(loihi2[k][4]) / int(res_graded[4]) for k in loihi2 if k[0] != "resonator")
+    assert round(fewer[0], -1) == round(fewer[-1], -1) == 270  # "with 270× fewer synapses"
+    assert "with 270× fewer synapses" in text
