@@ -156,3 +156,20 @@ def test_the_resonator_tables_are_the_recorded_ones() -> None:
     fewer = sorted(int(loihi2[k][4]) / int(res_graded[4]) for k in loihi2 if k[0] != "resonator")
     assert round(fewer[0], -1) == round(fewer[-1], -1) == 270  # "with 270× fewer synapses"
     assert "with 270× fewer synapses" in text
+
+
+def test_the_carrada_resonator_table_is_the_recorded_one() -> None:
+    """``python benchmarks/resonator_carrada.py --seeds 0 1 2 3 4`` (``resonator_carrada.txt``)."""
+    record = (RECORD.parent / "resonator_carrada.txt").read_text(encoding="utf-8")
+    assert "seeds [0, 1, 2, 3, 4], calibrated on seed 1000" in record
+    rows = _md_rows(record, "| motif | sensitivity |")
+    assert _table("| motif | sensitivity | precision |") == [[c.replace("*", "") for c in r]
+                                                            for r in rows]
+    sft, res = rows[0], rows[1]
+    n = [int(c.replace(",", "")) for c in (sft[4], res[4], sft[5], res[5], sft[6], res[6])]
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    assert (f"synapses {n[0] / n[1]:.0f}× fewer in total ({n[0] / 1e6:.1f} M / {n[1] / 1e6:.1f} M)"
+            f" and {n[2] / n[3]:.0f}× fewer in the two DFT stages ({n[2] / 1e6:.1f} M / "
+            f"{n[3] / 1e6:.2f} M); latency per frame {n[5]} instead of {_spaced(n[4])} steps "
+            f"({float(res[7]) * 1e3:.1f} ms instead of {float(sft[7]):.2f} s") in text
+    assert float(res[1]) > float(sft[1]) and float(res[2]) > float(sft[2])
