@@ -173,3 +173,23 @@ def test_the_carrada_resonator_table_is_the_recorded_one() -> None:
             f"{n[3] / 1e6:.2f} M); latency per frame {n[5]} instead of {_spaced(n[4])} steps "
             f"({float(res[7]) * 1e3:.1f} ms instead of {float(sft[7]):.2f} s") in text
     assert float(res[1]) > float(sft[1]) and float(res[2]) > float(sft[2])
+
+
+def test_the_drift_figures_in_the_prose_are_the_recorded_ones() -> None:
+    record = (RECORD.parent / "resonator_accuracy.txt").read_text(encoding="utf-8")
+    drift = {(r[0].split()[0], r[1].split(":")[0]): r
+             for r in _md_rows(record, "| coef bits | renorm |")}
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    off12, on12, off16 = drift[("12", "off")], drift[("12", "auto")], drift[("16", "off")]
+    assert f"it grows with `N`: {float(off12[3]):.2f} at `N = 1024`" in text
+    assert (f"`M = 32`, weight error **{on12[3]}** instead of {float(off12[3]):.3f} — better than "
+            f"16-bit coefficients without it ({off16[3]}; table below)") in text
+    assert on12[1] == "auto: every 32"
+    off8, on8 = drift[("8", "off")], drift[("8", "auto")]
+    assert (f"would drift by {float(off8[2]) * 100:.0f} % at `N = 1024` without renormalisation, "
+            f"{float(on8[2]) * 100:.0f} % with it") in text
+    assert (f"drifts each bin by up to {float(off12[4]) * 100:.0f} % ({float(off12[5]):.1f} rad of "
+            f"phase) over N = 1024 steps and the magnitude error is {float(off12[6]):.4f}") in text
+    head = _record().splitlines()[1]
+    assert head == "paper / authors' code at T=256: 0.0108 (N=256), 0.0149 (N=1024)"
+    assert "the authors' code gives ≈ 0.0108 (N=256) and 0.0149 (N=1024)" in text
