@@ -106,3 +106,43 @@ def test_the_ti_range_energy_figures_are_the_recorded_report() -> None:
                 f"per frame against {dsp} µJ for the range DFT on the C674x (ratio {ratio}).")
     assert expected in _text()
     assert "| rng | measured |" in report
+
+
+def _stages(report: str) -> dict[str, list[str]]:
+    head = "| node | motif | inputs | neurons |"
+    lines = report[report.index(head):].split("\n\n")[0].splitlines()
+    names = [c.strip() for c in lines[0].strip("|").split("|")]
+    return {cells[0]: dict(zip(names, cells, strict=True)) for cells in
+            ([c.strip() for c in line.strip("|").split("|")] for line in lines[2:])}
+
+
+def test_the_carrada_placement_figures_are_the_recorded_reports() -> None:
+    text = _text()
+    for name in ("report_carrada_loihi.md", "report_carrada_loihi2.md"):
+        report = (RESULTS / name).read_text(encoding="utf-8")
+        stages = _stages(report)
+        total = re.search(r"Total ([\d ]+) steps = ([\d.]+) s per frame", report)
+        assert f"{total.group(1)} steps = {total.group(2)} s" in text, name
+        runs = sum(int(st["repetitions"].replace(" ", "")) for st in stages.values()
+                   if st["node"] != "det")
+        steps = int(stages["rng__moving"]["time_steps"])
+        cores = sum(int(st["cores"]) for st in stages.values())
+        if name.endswith("loihi.md"):
+            rng, dop, det = stages["rng__moving"], stages["dop__moving"], stages["det"]
+            assert (rng["multiplexed"], dop["multiplexed"], det["multiplexed"]) == ("yes",) * 2 \
+                + ("no",)
+            assert (f"`rng__moving` (R = {rng['repetitions']}, one instance: {rng['neurons']} "
+                    f"neurons, {rng['cores']} cores) and `dop__moving` (R = {dop['repetitions']}, "
+                    f"{dop['neurons']} neurons, {dop['cores']} cores); the OS-CFAR stays spatial "
+                    f"({det['cores']} cores): {cores} cores in all") in text
+            assert f"(256 + 1 024) × {steps} + 100 = {total.group(1)} steps" in text
+            fit = re.search(r"it would fit with steps of at most (\S+) s\)", report).group(1)
+            assert f"it would with steps of at most {fit} s" in text
+            assert runs == 256 + 1024
+        else:
+            rng, dop, det = stages["rng__moving"], stages["dop__moving"], stages["det"]
+            assert (rng["multiplexed"], dop["multiplexed"]) == ("yes", "no")
+            assert (f"only `rng__moving` is multiplexed ({rng['cores']} cores; `dop__moving` is "
+                    f"spatial on {dop['cores']} cores, the OS-CFAR on {det['cores']}: {cores} "
+                    f"cores), {int(rng['repetitions']) + 1} × {steps} + 100 = "
+                    f"{total.group(1)} steps") in text
