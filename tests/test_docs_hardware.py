@@ -146,3 +146,34 @@ def test_the_carrada_placement_figures_are_the_recorded_reports() -> None:
                     f"spatial on {dop['cores']} cores, the OS-CFAR on {det['cores']}: {cores} "
                     f"cores), {int(rng['repetitions']) + 1} × {steps} + 100 = "
                     f"{total.group(1)} steps") in text
+
+
+def test_the_board_figures_are_the_recorded_run() -> None:
+    """``python benchmarks/allocation.py --only boards`` (``allocation_boards.txt``)."""
+    record = (RESULTS / "allocation_boards.txt").read_text(encoding="utf-8")
+    text = _text()
+
+    def spaced(value: str) -> str:
+        return f"{int(value.replace(',', '')):,}".replace(",", " ")
+
+    refused = {m.group(1): m for m in re.finditer(
+        r"^imaging \(192 virtual rx\) on board (\w+) .*?: ([\d.]+) s; BudgetError: network "
+        r"'imaging' needs ([\d,]+) (neurons|bits of synaptic memory) but .*? x ([\d,]+) cores "
+        r"= .*?: at least ([\d,]+) cores", record, re.M)}
+    assert set(refused) == {"kapoho_point", "nahuku32", "spinnaker2_48"}
+    assert all(float(m.group(2)) < 0.5 for m in refused.values())  # "each in < 0.5 s"
+    kapoho, nahuku, spinnaker = (refused[k] for k in ("kapoho_point", "nahuku32",
+                                                      "spinnaker2_48"))
+    assert (f"({spaced(kapoho.group(3))} neurons need ≥ {spaced(kapoho.group(6))} Loihi 2 cores, "
+            f"{spaced(kapoho.group(5))} available)") in text
+    bits = int(nahuku.group(3).replace(",", ""))
+    assert f"{bits / 1e9:.0f} Gbit of synapses, ≥ {spaced(nahuku.group(6))} cores" in text
+    assert f"≥ {spaced(spinnaker.group(6))} PEs" in text
+    fits = re.search(r"on board hala_point \((\d+) x loihi2\): fits on ([\d,]+) cores, (\d+) of "
+                     r"\d+ chips; compile \(quantize\+split\+place\+report\) ([\d.]+) s; peak "
+                     r"resident memory of this process ([\d.]+) GB", record)
+    chips, cores, used, secs, gb = fits.groups()
+    assert (f"it fits on {spaced(cores)} cores = {used} of the {spaced(chips)} chips "
+            f"in {secs} s (quantize + split + place + report) with a peak resident memory of "
+            f"{gb} GB") in text
+    assert "Inter-chip: 0 messages per frame" in record
