@@ -177,3 +177,12 @@ def test_the_board_figures_are_the_recorded_run() -> None:
             f"in {secs} s (quantize + split + place + report) with a peak resident memory of "
             f"{gb} GB") in text
     assert "Inter-chip: 0 messages per frame" in record
+
+
+def test_the_split_weights_figure_is_the_recorded_report() -> None:
+    """"768 extra synapses on 2 899 968": the OS-CFAR's synapses in the carrada report, less
+    those of the unsplit hand-built network the *Figures* block asserts."""
+    report = (RESULTS / "report_carrada_loihi.md").read_text(encoding="utf-8")
+    det = int(_stages(report)["det"]["synapses"].replace(" ", ""))
+    assert f"{det - 2_899_968} extra synapses on 2 899 968" in _text()
+    assert "2_899_968" in PAGE.read_text(encoding="utf-8")  # the block's assert
