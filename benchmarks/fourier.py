@@ -1,14 +1,14 @@
-"""Accuracy studies of the spiking Fourier motifs (issue 4); prints figures, not a test.
+"""Accuracy studies of the spiking Fourier motifs; prints figures, not a test.
 
-``python benchmarks/fourier.py`` runs every study defined here:
+``python benchmarks/fourier.py [--study time-coded|rate|fft ...]`` runs the studies defined here
+(all by default):
 
 * ``time_coded_study()`` — the time-coded S-FT (motif ``time``) on the real TI chirps
   (first N samples, 4 chirps, S-FT accuracy protocol): RMSE vs T = 32 … 512 for both
   calibration policies and both charging schedules (plus the schedule ``auto`` picks);
   the spiking magnitudes' error against the true modulus; the compiled range S-FT →
   Doppler S-FT → magnitude chain on the carrada and seed003 presets.
-* ``rate_study()`` / ``fft_study()`` — the rate-coded S-DFT and radix-4 S-FFT (part B),
-  when defined in this file.
+* ``rate_study()`` / ``fft_study()`` — the rate-coded S-DFT and radix-4 S-FFT (part B).
 
 Everything runs the closed-form engine (identical to the step engine on these networks).
 """
@@ -221,7 +221,7 @@ def fft_study(ns=(256, 512, 1024), steps=(100, 256)) -> None:
               f" {sum(butterflies)} butterfly synapses (per layer "
               f"{butterflies}, limit 16N = {16 * n}) + {offsets} offset synapses, {net.n_steps} "
               f"steps; estimate {e.neurons}, {e.synapses}, {e.steps}")
-    print("TI chirps, NOTES 1.2 protocol, static calibration over the 4 chirps (closed form):")
+    print("TI chirps, the S-FT protocol, static calibration over the 4 chirps (closed form):")
     print(f"{'N':>5} {'T':>4} {'S-FFT':>8} {'dense same code':>15} {'ratio':>6} "
           f"{'time motif':>10} {'closed==step':>12}")
     for n in ns:
@@ -249,13 +249,16 @@ def fft_study(ns=(256, 512, 1024), steps=(100, 256)) -> None:
 # ---------------------------------------------------------------------------- main
 
 
+STUDIES = {"time-coded": time_coded_study, "rate": rate_study, "fft": fft_study}
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Run every study defined in this file."""
-    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
-    time_coded_study()
-    for study in ("rate_study", "fft_study"):
-        if study in globals():
-            globals()[study]()
+    """Run the studies named by ``--study`` (every study by default)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--study", action="append", choices=list(STUDIES),
+                        help="a study to run (repeatable; default: all, the rate study is long)")
+    for name in parser.parse_args(argv).study or list(STUDIES):
+        STUDIES[name]()
 
 
 if __name__ == "__main__":

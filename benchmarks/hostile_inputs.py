@@ -63,10 +63,25 @@ def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
     (tmp / "grid.yaml").write_text(yaml.safe_dump({
         "name": "g", "chains": {"a": "c.yaml"}, "grid": {a: [0, 1] for a in axes},
         "frames": {"source": "scene", "n_frames": 1, "frames_per_cell": 1}}))
+    lols = ['name: &a ["lol"' + ', "lol"' * 8 + "]"]
+    lols += [f"x{h}: &{h} [" + ", ".join([f"*{p}"] * 9) + "]"
+             for p, h in zip("abcdefgh", "bcdefghi", strict=True)]
+    (tmp / "laughs.yaml").write_text("\n".join(lols) + "\nnodes: []\n")  # 9**9 strings
+    (tmp / "deep.yaml").write_text("name: " + "[" * 5000 + "\nnodes: []\n")
+    (tmp / "long.yaml").write_text("name: long\nnodes:\n- {id: x, op: input, shape: {range: 4}}\n"
+                                   + "".join(f"- {{id: o{k}, op: output, input: x}}\n"
+                                             for k in range(27_999)))
+    chain = "from ir import Graph; Graph.from_yaml(open({p!r}).read())"
     load = ("from compiler.cli.arrays import load_arrays; import inspect; load_arrays([{p!r}], "
             "['x'], 'c', **({{'shapes': {{'x': {port}}}}} if 'shapes' in "
             "inspect.signature(load_arrays).parameters else {{}}))")
     return {
+        "chain, billion laughs (9^9 strings) as name": (tmp / "laughs.yaml", chain.format(
+            p=str(tmp / "laughs.yaml"))),
+        "chain, 5 000 nested [ as name": (tmp / "deep.yaml", chain.format(
+            p=str(tmp / "deep.yaml"))),
+        "chain, 28 000 nodes, valid": (tmp / "long.yaml", chain.format(
+            p=str(tmp / "long.yaml"))),
         ".mat 1x1 double, 3.9 GiB data element": (tmp / "bomb.mat", load.format(
             p=str(tmp / "bomb.mat"), port=(1,))),
         ".npz member declaring 3.9 GiB, port (4,)": (tmp / "bomb.npz", load.format(

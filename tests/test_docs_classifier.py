@@ -1,5 +1,6 @@
 """Every figure under *Figures* of docs/classifier.md is the recorded output of
-``python benchmarks/classifier.py`` (``benchmarks/results/classifier.txt``).
+``python benchmarks/classifier.py`` (``benchmarks/results/classifier.txt``); the dataset's split
+sizes are counted from ``make_dataset``'s draws.
 
 The run trains four networks for minutes, so the tests compare the page with the record and
 check that the script still prints every line the page quotes (by reading its source).
@@ -9,6 +10,8 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "classifier.md"
@@ -92,3 +95,42 @@ def test_the_script_still_prints_those_lines() -> None:
                   "synaptic events / ANN MACs", "step simulator: accuracy", "per-sample agreement",
                   "of the ANN's", "Table 3 row", "Acceptance checks", "total "):
         assert piece in source, piece
+
+
+def _split_sizes(n_scenes: int, seed: int, fractions=(0.7, 0.15), max_objects: int = 3):
+    """Sequences per split of ``make_dataset``, from its first draws of each scene (the split
+    and the object count come before anything is synthesised)."""
+    sizes = {"train": 0, "val": 0, "test": 0}
+    per_scene = []
+    for scene in range(n_scenes):
+        rng = np.random.default_rng([seed, scene])
+        u = rng.random()
+        split = "train" if u < fractions[0] else "val" if u < sum(fractions) else "test"
+        n = int(rng.integers(1, max_objects + 1))
+        sizes[split] += n
+        per_scene.append((split, n))
+    return sizes, per_scene
+
+
+def test_the_split_sizes_are_the_shipped_datasets() -> None:
+    """The page's "train 4 160, val 966, test 866" of the shipped 3 000-scene dataset: the
+    counts from each scene's first draws, which a small ``make_dataset`` confirms draw by draw."""
+    from compiler.classifier.default import DATASET
+    from radar.roi_dataset import make_dataset
+
+    sizes, per_scene = _split_sizes(DATASET["n_scenes"], DATASET["seed"])
+    small = make_dataset(**{**DATASET, "n_scenes": 3})
+    scenes = small.meta["scene"]
+    assert [(str(small.split[scenes == s][0]), int((scenes == s).sum())) for s in range(3)] \
+        == per_scene[:3]
+    text = PAGE.read_text(encoding="utf-8")
+    quoted = re.search(r"\(([\d ]+) scenes, ([\d ]+) sequences of [^:]+: train ([\d ]+), "
+                       r"val ([\d ]+),\s+test ([\d ]+)\)", text)
+    assert quoted, "the dataset's sizes are not on the page"
+    n_scenes, total, *splits = (int(norm(g)) for g in quoted.groups())
+    assert n_scenes == DATASET["n_scenes"]
+    assert splits == [sizes["train"], sizes["val"], sizes["test"]]
+    assert total == sum(splits)
+    record = RECORD.read_text(encoding="utf-8")
+    assert f"dataset: {total} ROI sequences" in record
+    assert f"test split {sizes['test']} " in record
