@@ -34,7 +34,8 @@ __all__ = ["MOTIF_OPTION_MODELS", "CfarOptions", "FftOptions", "MotifSettings", 
 _Finite = Annotated[float, Field(allow_inf_nan=False)]
 _Pair = tuple[_Finite, _Finite]
 _Quantile = Annotated[float, Field(ge=0, le=1)]
-_Steps = Annotated[int, Field(ge=1)]
+#: Steps per code window: at most 2^31 (a step index is an int64 sum of such windows).
+_Steps = Annotated[int, Field(ge=1, le=1 << 31)]
 _CONFIG = ConfigDict(frozen=True, extra="ignore")
 
 
@@ -48,8 +49,9 @@ class TimeInputOptions(BaseModel):
                                   description="a finite number >= 1 (1: no guard)")
     output_spikes: Literal["auto", "time", "graded"] = Field(
         "auto", description="auto, time or graded")
-    encoder_headroom: Literal["auto"] | Annotated[float, Field(ge=1, allow_inf_nan=False)] = Field(
-        "auto", description="auto or a finite number >= 1")
+    encoder_headroom: Literal["auto"] | Annotated[float, Field(ge=1, le=2.0 ** 62,
+                                                               allow_inf_nan=False)] = Field(
+        "auto", description="auto or a number in 1..2^62 (it costs log2 of it in code bits)")
 
 
 class TimeDftOptions(BaseModel):
