@@ -91,13 +91,14 @@ def test_the_carrada_energy_figures_are_the_recorded_report() -> None:
         f"{rows['det']['dsp_J'] * 1e3:.1f} mJ of it), so the chip costs {dynamic / dsp:.1f} × the "
         f"DSP in dynamic energy and {ratio} × with its leakage.")
     assert expected in _text()
-    assert "loihi.neuron_update_j | 8.1e-11 |" in report
-    assert "loihi.static_power_w | 0.104 |" in report
+    assert "loihi_programmable.neuron_update_j | 8.1e-11 |" in report
+    assert "loihi_programmable.static_power_w | 0.104 |" in report
 
 
 def test_the_ti_range_energy_figures_are_the_recorded_report() -> None:
     report = (RESULTS / "report_ti_range_loihi.md").read_text(encoding="utf-8")
-    line = re.search(r"energy ≈ ([\d.]+) µJ/frame on loihi \(dynamic ([\d.]+) µJ \+ static "
+    line = re.search(r"energy ≈ ([\d.]+) µJ/frame on loihi_programmable \(dynamic ([\d.]+) µJ "
+                     r"\+ static "
                      r"([\d.]+) µJ; measured counts\); conventional DSP \(C674x\) ≈ ([\d.]+) "
                      r"µJ/frame, chip/DSP = (\d+)\.", report)
     frame, dynamic, static, dsp, ratio = line.groups()

@@ -236,7 +236,7 @@ def _give_up(selection: Selection, programs: list, accuracy: str,
     if not scored and budget is not None:  # nothing fits: the chip's limit, as it was
         raise budget
     if not scored:
-        errors = "; ".join(a.error or "" for a in selection.attempts)
+        errors = "; ".join(dict.fromkeys(a.error or "" for a in selection.attempts))
         raise AccuracyError(f"no configuration compiles: {errors}")
     best = min(scored)[-1]
     attempt = selection.attempts[best]
