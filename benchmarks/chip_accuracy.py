@@ -284,6 +284,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=None,
                         help="markdown file (default docs/chip_accuracy.md without --case)")
     parser.add_argument("--list", action="store_true", help="list the hard cases and exit")
+    parser.add_argument("--presets-only", action="store_true",
+                        help="only the preset scenes and captures (no hard cases)")
     parser.add_argument("--auto", action="store_true",
                         help="preset scenes and hard cases: the measured compile "
                              "(radarsnn.compile_graph's defaults: the accuracy contract on "
@@ -313,7 +315,7 @@ def main(argv: list[str] | None = None) -> int:
     for target in args.targets.split(","):
         if not chosen:
             lines += preset_rows(target, seeds, args.quick, motifs, args.auto)
-        for name in chosen or list(HARD_CASES):
+        for name in chosen or ([] if args.presets_only else list(HARD_CASES)):
             try:
                 score = measure_case(name, target, seeds=hard_seeds, motifs=motifs,
                                      calibration_seeds=(*CALIBRATION_SEEDS, HELD_BACK_SEED)
