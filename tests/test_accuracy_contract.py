@@ -70,10 +70,11 @@ def test_auto_keeps_a_spiking_chain_that_holds_on_held_out_frames(target):
         assert s.figures["error_db"] < -10 and s.figures["lost"] == 0
 
 
-def test_ca_cfar_on_linear_power_is_measured_spiking_before_any_host_fallback():
+def _ca_on_linear_power(n_frames: int):
+    """Noise maps in linear power with three returns 20-60 dB up per frame, and a CA-CFAR."""
     rng = np.random.default_rng(3)
-    maps = rng.exponential(size=(4, 16, 64)) * 1e6
-    for f in range(4):
+    maps = rng.exponential(size=(n_frames, 16, 64)) * 1e6
+    for f in range(n_frames):
         for _ in range(3):
             maps[f, rng.integers(16), rng.integers(64)] *= 10 ** rng.uniform(2, 6)
     g = Graph.from_dict({"name": "ca", "nodes": [
@@ -81,6 +82,11 @@ def test_ca_cfar_on_linear_power_is_measured_spiking_before_any_host_fallback():
         {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
          "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
         {"id": "o", "op": "output", "input": "det"}]})
+    return maps, g
+
+
+def test_ca_cfar_on_linear_power_is_measured_spiking_before_any_host_fallback():
+    maps, g = _ca_on_linear_power(4)
     p = compile_graph(g, "loihi2", calibration_inputs={"p": maps},
                       simulator=ReferenceSimulator())
     attempts = p.records.extra["motif_selection"]["attempts"]
@@ -221,16 +227,7 @@ def test_a_deadline_refusal_names_the_stage_of_the_slowest_network():
 def test_the_cli_summary_says_which_stage_the_search_kept_on_the_host(tmp_path, capsys):
     from compiler.cli import main
 
-    rng = np.random.default_rng(3)
-    maps = rng.exponential(size=(3, 16, 64)) * 1e6
-    for f in range(3):
-        for _ in range(3):
-            maps[f, rng.integers(16), rng.integers(64)] *= 10 ** rng.uniform(2, 6)
-    g = Graph.from_dict({"name": "ca", "nodes": [
-        {"id": "p", "op": "input", "shape": {"doppler": 16, "range": 64}, "domain": "power"},
-        {"id": "det", "op": "cfar", "input": "p", "kind": "ca", "guard": [1, 1],
-         "train": [2, 4], "pfa": 1e-3, "edge": ["wrap", "clip"]},
-        {"id": "o", "op": "output", "input": "det"}]})
+    maps, g = _ca_on_linear_power(3)
     chain, frames = tmp_path / "ca.yaml", tmp_path / "p.npy"
     chain.write_text(g.to_yaml())
     np.save(frames, maps)
