@@ -64,3 +64,12 @@ def test_the_benchmark_still_prints_those_columns() -> None:
     assert header[3:8] == ["cell sensitivity", "cell precision",
                            "targets found (conv / spiking)", "firm targets missed",
                            "false objects per frame (conv / spiking)"]
+
+
+def test_the_spinnaker2_preset_rows_are_the_recorded_run() -> None:
+    record = (ROOT / "benchmarks" / "results" / "chip_accuracy_presets_spinnaker2.md")
+    rows = [line for line in record.read_text(encoding="utf-8").splitlines()
+            if line.startswith("| spinnaker2 |")]
+    page = PAGE.read_text(encoding="utf-8")
+    top = page[:page.index("## Hard cases")]
+    assert len(rows) == 7 and all(row in top.splitlines() for row in rows)
