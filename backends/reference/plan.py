@@ -73,8 +73,11 @@ class SimPlan:
     def state_limit(self) -> int | None:
         """The chip's state range ``2^(state_bits−1) − 1`` in state units, for a network
         quantized for a target with ``state_bits`` (else ``None``)."""
-        bits = self.network.meta.get("state_bits")
-        return (1 << (int(bits) - 1)) - 1 if bits else None
+        meta = self.network.meta if isinstance(self.network.meta, Mapping) else {}
+        bits = meta.get("state_bits")  # a forged artifact's value is no limit, never an error
+        if isinstance(bits, bool) or not isinstance(bits, int) or not 2 <= bits <= 64:
+            return None
+        return (1 << (bits - 1)) - 1
 
     @property
     def populations(self) -> Mapping[str, Population]:

@@ -25,7 +25,7 @@ Examples
 --------
 >>> [c.label for c in LADDERS["cfar"]]
 ['time', 'time(cfar_steps=300)', 'time(cfar_steps=1000)', 'host']
->>> Ladder(("dft", "cfar")).config([0, 2])
+>>> Ladder(("dft", "cfar")).config([0, 3])
 ({'dft': 'time', 'cfar': 'host'}, {})
 """
 
