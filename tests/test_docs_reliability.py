@@ -123,3 +123,25 @@ def test_the_benchmark_still_builds_every_quoted_case(tmp_path: Path) -> None:
     for case, _ in CELLS.values():
         path, _call = built[case]
         assert path.stat().st_size == record[case][0], case
+
+
+def test_the_fuzz_table_gives_each_test_its_ci_budget() -> None:
+    """The "CI examples" column is ``⌈10 × 200 × share⌉`` per ``@budget(share)``, in order."""
+    import math
+
+    from hypothesis import settings
+
+    root = Path(__file__).resolve().parents[1]
+    doc = (root / "docs" / "reliability.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| .* \| `(test_fuzz_\w+\.py)` \| .* \| ([^|]+) \|$", doc, re.M)
+    checked = 0
+    for module, cell in rows:
+        shares = re.findall(r"@budget\(([\d.]+)\)",
+                            (root / "tests" / "fuzz" / module).read_text(encoding="utf-8"))
+        if not shares:  # parametrized, not a hypothesis budget (the writers)
+            continue
+        want = " + ".join(f"{math.ceil(10 * 200 * float(x)):,}".replace(",", " ")
+                          for x in shares)
+        assert cell.strip() == want, module
+        checked += 1
+    assert checked >= 12 and settings.get_profile("ci").max_examples == 200
