@@ -75,3 +75,11 @@ def test_every_preset_row_is_a_recorded_run() -> None:
            if re.match(r"\| (loihi|loihi2|spinnaker2|unbounded) \|", line)
            and line.count("|") == 8]  # the preset table's seven columns
     assert len(records) == 3 and len(rows) == 28 and sorted(top) == sorted(rows)
+
+
+def test_the_loihi_hard_rows_are_the_recorded_run() -> None:
+    record = ROOT / "benchmarks" / "results" / "chip_accuracy_loihi_host_dfts.md"
+    rows = [line for line in record.read_text(encoding="utf-8").splitlines()
+            if line.startswith("| loihi |") and "rng=host" in line]
+    page = PAGE.read_text(encoding="utf-8").splitlines()
+    assert len(rows) == 6 and all(row in page for row in rows)
