@@ -146,7 +146,14 @@ def human_bytes(n: float) -> str:
     --------
     >>> human_bytes(512), human_bytes(3.2e9), human_bytes(8 << 30)
     ('512 B', '3.2 GB', '8.59 GB')
+
+    An integer beyond a float's range (a forged file's count) is given by its bit length:
+
+    >>> human_bytes(10 ** 4000)
+    'about 2^13287 B'
     """
+    if isinstance(n, int) and n.bit_length() > 1000:
+        return f"about 2^{n.bit_length() - 1} B"
     for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if n >= scale:
             return f"{n / scale:.3g} {unit}"
