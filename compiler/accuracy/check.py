@@ -63,6 +63,8 @@ def check_program(program, inputs: Mapping[str, np.ndarray], simulator: Simulato
     count = n_frames(graph.infer_types(), inputs, f"program {graph.name!r}")
     run = simulator.run(program, inputs) if run is None else run
     reference = evaluate(graph, inputs, registry=program.evaluators)
+    overflow = {k: v for sim in run.simulations
+                for k, v in (getattr(sim, "state_overflow", None) or {}).items()}
     return measure_contract(program, run.values, reference, run.clipped, n_frames=count or 1,
                             framed=count is not None, tolerances=tolerances,
-                            held_out=held_out, note=note)
+                            held_out=held_out, note=note, overflow=overflow)

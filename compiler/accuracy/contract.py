@@ -16,6 +16,7 @@ figure               meaning                                                    
 ``precision``        spiking detections that the conventional chain also has     ≥ 0.97
 ``missed``           conventional objects with no spiking detection within ±1    0
 ``extra_per_map``  spiking objects with no conventional detection within ±1    ≤ 1
+``overflow``         neuron-steps whose state left the chip's ``state_bits``     0
 ===================  ==========================================================  =========
 
 A −10 dB error moves a CFAR's noise estimate by under 0.5 dB; a code that decodes the
@@ -24,6 +25,13 @@ themselves: a return above the top of its latency code (leakage) fires first eit
 and what clipping costs shows in the decisions and objects. Errors of upstream stages
 carry into later ones, as on the chip, so the *first* stage that breaks its contract (in
 program order) is the one named.
+
+The reference simulator computes wider than a chip's state: where a membrane or current
+of a stage's populations leaves ``±(2^(state_bits−1) − 1)`` the chip's ``u`` wraps and its
+``v`` saturates (and fires), so what was simulated is not what the chip computes. Those
+neuron-steps (``SimResult.state_overflow``; the closed form counts the final membranes, a
+lower bound) break the contract of the stage whose populations they are, whatever its
+other figures.
 
 Examples
 --------
@@ -80,10 +88,14 @@ class StageCheck:
     figures: dict[str, Any]
     clipped: float = 0.0
     upstream: tuple[str, ...] = ()
+    overflow: int = 0
 
     def failures(self, tol: Tolerances) -> list[str]:
         """One phrase per figure beyond its tolerance (empty: the stage holds)."""
         f, out = self.figures, []
+        if self.overflow:
+            out.append(f"{self.overflow} neuron-steps beyond the chip's state range "
+                       "(its u wraps, its v saturates: the simulation is not the chip)")
         if self.kind == "values":  # a detector's clipped inputs show in its decisions
             if self.clipped > tol.clipped_max:
                 out.append(f"clipped {self.clipped:.2e} of its inputs > {tol.clipped_max:g}")
@@ -115,13 +127,14 @@ class StageCheck:
             body = (f"sensitivity {f['sensitivity']:.3f}, precision {f['precision']:.3f}, "
                     f"objects kept {f['kept']}/{f['objects']}, "
                     f"{f['extra_per_map']:.2f} extra per map")
-        return f"{self.node} [{self.motif}]{via}: {body}, clipped {self.clipped:.1e}"
+        over = f", {self.overflow} states out of range" if self.overflow else ""
+        return f"{self.node} [{self.motif}]{via}: {body}, clipped {self.clipped:.1e}{over}"
 
     def to_dict(self) -> dict:
         """JSON-able."""
         return {"node": self.node, "motif": self.motif, "kind": self.kind,
                 "figures": self.figures, "clipped": self.clipped,
-                "upstream": list(self.upstream)}
+                "upstream": list(self.upstream), "overflow": self.overflow}
 
 
 @dataclass(frozen=True)
@@ -198,7 +211,7 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
                      reference: Mapping[str, np.ndarray], clipped: Mapping[str, int], *,
                      n_frames: int, framed: bool | None = None,
                      tolerances: Tolerances | None = None, held_out: bool = True,
-                     note: str = "") -> Contract:
+                     note: str = "", overflow: Mapping[str, int] | None = None) -> Contract:
     """Every decoded node of every spiking segment against the golden values.
 
     Parameters
@@ -219,6 +232,10 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
         The contract (default :class:`Tolerances`).
     held_out, note : bool, str
         Whether the frames were held back from the calibration, and a remark.
+    overflow : mapping of str to int, optional
+        Per population id, neuron-steps beyond the chip's state range on those frames
+        (``SimResult.state_overflow``); each stage carries those of its segment's
+        populations built for it or for the nodes inside the segment before it.
 
     Returns
     -------
@@ -238,6 +255,7 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
         inner = tuple(n for n in graph.topological_order()
                       if motifs.get(n, "host") != "host" and n not in seg.outputs
                       and n in _segment_nodes(program, seg))
+        over_of = _overflow_by_node(seg.network, overflow or {})
         for node in seg.outputs:
             if node not in values or node not in reference:
                 continue
@@ -253,7 +271,8 @@ def measure_contract(program, values: Mapping[str, np.ndarray],
                 fig = value_figures(got, want).to_dict()
                 kind = "values"
             stages.append(StageCheck(node=node, motif=str(motifs.get(node, "?")), kind=kind,
-                                     figures=fig, clipped=frac, upstream=inner))
+                                     figures=fig, clipped=frac, upstream=inner,
+                                     overflow=sum(over_of.get(n, 0) for n in (node, *inner, ""))))
     return Contract(stages=stages, tolerances=tol, n_frames=n_frames, held_out=held_out,
                     note=note)
 
@@ -277,6 +296,26 @@ def firm_detections(graph, node: str, x: np.ndarray, evaluators=None) -> np.ndar
     g.add(Output(), g.add(raised, g.add(Input(shape=dict(t.axes), complex=t.complex,
                                               domain=t.domain), id="x"), id="c"), id="o")
     return np.asarray(evaluate(g, {"x": np.asarray(x)}, registry=evaluators)["o"], bool)
+
+
+def _overflow_by_node(network, overflow: Mapping[str, int]) -> dict[str, int]:
+    """Neuron-steps out of the state range per IR node (a population's ``origin``) of
+    ``network``; populations without an origin count towards every stage of the segment.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> net = NS(populations=[NS(id="f/a", origin={"node": "f"}), NS(id="r", origin={})])
+    >>> _overflow_by_node(net, {"f/a": 3, "r": 2, "other": 9})
+    {'f': 3, '': 2}
+    """
+    out: dict[str, int] = {}
+    for pop in getattr(network, "populations", None) or ():
+        n = int(overflow.get(pop.id, 0))
+        if n:
+            key = pop.origin.get("node", "")
+            out[key] = out.get(key, 0) + n
+    return out
 
 
 def _segment_nodes(program, seg) -> set[str]:
