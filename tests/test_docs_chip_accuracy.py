@@ -83,3 +83,25 @@ def test_the_loihi_hard_rows_are_the_recorded_run() -> None:
             if line.startswith("| loihi |") and "rng=host" in line]
     page = PAGE.read_text(encoding="utf-8").splitlines()
     assert len(rows) == 6 and all(row in page for row in rows)
+
+
+def test_the_unseen_seed_table_is_the_recorded_runs_and_holds() -> None:
+    """The section on seeds 7-8: each row is a recorded run's, and each keeps the contract."""
+    recorded = {}
+    for target in ("loihi2", "spinnaker2"):
+        record = ROOT / "benchmarks" / "results" / f"chip_accuracy_unseen_{target}.md"
+        text = record.read_text(encoding="utf-8")
+        assert "--auto --seeds 7,8" in text
+        for line in text.splitlines():
+            if line.startswith(f"| {target} |"):
+                c = _cells(line)
+                recorded[(target, c[1].split(" ")[0])] = [c[3], c[4], c[5], c[6], c[7]]
+    text = PAGE.read_text(encoding="utf-8")
+    section = text[text.index("## Hard cases on seeds no table above was tuned on"):]
+    section = section[:section.index("\n## ")]
+    page = {(c[0], c[1]): [c[3], c[4], c[5], c[6], c[7]]
+            for c in map(_cells, section.splitlines()) if c[0] in ("loihi2", "spinnaker2")}
+    assert len(recorded) == 7 and page == recorded
+    for key, (sens, prec, _, firm, _) in recorded.items():
+        assert float(sens) >= 0.97 and float(prec) >= 0.97, key
+        assert firm.startswith("0 of "), key
