@@ -24,6 +24,7 @@ import ir.ops
 import radarsnn
 from backends.emit.numpy_host import HOST_EMITTERS
 from compiler.calibration_bounds import propagate_bounds
+from compiler.lowering import HOST_ONLY
 from ir import Graph, evaluate
 from ir.implementations import EVAL_REGISTRY
 from ir.ops import OP_REGISTRY, Op
@@ -175,3 +176,10 @@ def test_docs_emit_lists_the_host_emitters():
     sentence = text[text.index("Host segments supported"):].split("Any other host op")[0]
     assert sorted(re.findall(r"`(\w+)`", sentence.split(":", 1)[1])) == sorted(
         cls.op_name() for cls in HOST_EMITTERS)
+
+
+def test_docs_compiler_lists_the_host_only_ops():
+    text = (DOCS / "compiler.md").read_text()
+    sentence = text[text.index("says why in `compiler.lowering.HOST_ONLY`"):].split("run on")[0]
+    assert sorted(re.findall(r"`(\w+)`", sentence.split("(", 1)[1])) == sorted(
+        cls.op_name() for cls in HOST_ONLY)
