@@ -89,6 +89,14 @@ class Op(IRModel):
         -------
         ndarray
             The value, shaped and typed as :meth:`infer` says (the interpreter checks it).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from ir.ops.linear import Sum
+        >>> t = TensorType(axes={"rx": 2, "range": 3})
+        >>> Sum(axis="rx").evaluate("s", [np.arange(6.0).reshape(2, 3)], [t]).tolist()
+        [3.0, 5.0, 7.0]
         """
         raise NotImplementedError(f"{type(self).__name__}.evaluate")
 
@@ -107,6 +115,12 @@ class Op(IRModel):
         Returns
         -------
         float
+
+        Examples
+        --------
+        >>> from ir.ops.elementwise import Add
+        >>> Add().bound("s", [1.0, 2.5], [])
+        3.5
         """
         raise NotImplementedError(f"{type(self).__name__}.bound")
 
@@ -123,12 +137,26 @@ class Op(IRModel):
 
     @classmethod
     def has_evaluate(cls) -> bool:
-        """Whether the class defines (or inherits) a reference implementation."""
+        """Whether the class defines (or inherits) a reference implementation.
+
+        Examples
+        --------
+        >>> from ir.ops.io import Input, Output
+        >>> Output.has_evaluate(), Input.has_evaluate()
+        (True, False)
+        """
         return cls.evaluate is not Op.evaluate
 
     @classmethod
     def has_bound(cls) -> bool:
-        """Whether the class defines (or inherits) a calibration bound rule."""
+        """Whether the class defines (or inherits) a calibration bound rule.
+
+        Examples
+        --------
+        >>> from ir.ops.elementwise import Add, Log
+        >>> Add.has_bound(), Log.has_bound(), Log.no_bound[:16]
+        (True, False, 'no useful worst ')
+        """
         return cls.bound is not Op.bound
 
     # -- helpers for infer -------------------------------------------------------------
