@@ -19,10 +19,10 @@ Examples
 
 from __future__ import annotations
 
-from ir.ops import OP_REGISTRY
+from ir.ops import OP_REGISTRY, Op
 from ir.ops.registry import EvalRegistry, Implementation, reference_implementations
 
 __all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation"]
 
-EVAL_REGISTRY: dict = reference_implementations(OP_REGISTRY)
+EVAL_REGISTRY: dict[type[Op], Implementation] = reference_implementations(OP_REGISTRY)
 """The reference implementation of every op that computes (graph inputs take the given arrays)."""
