@@ -117,7 +117,7 @@ def _chain(repeats: int) -> None:
     frame = simulate_frame(config, SCENE_PRESETS["carrada"](), seed=0).adc
     graph = range_doppler_chain(config)
     run = lambda: evaluate(graph, {"adc": frame})  # noqa: E731
-    import ir.implementations as golden  # the interpreter's CFAR is radar.cfar.cfar
+    import ir.ops.compare as golden  # the interpreter's CFAR (CFAR.evaluate) is radar.cfar.cfar
 
     fast = golden.cfar
     with threadpool_limits(limits=1):

@@ -400,10 +400,10 @@ def _check_host_implementations(program: CompiledProgram, impls: Mapping[type, A
     """Refuse a host segment whose op has no reference implementation (it could not run)."""
     for node in program.host_nodes:
         op = program.graph.op(node)
-        if type(op) not in impls:
+        if type(op) not in impls and not type(op).has_evaluate():
             name = type(op).__name__
             raise CompileError(
                 f"node {node!r} ({op.op}) runs on the host, but {name} has no reference "
-                f"implementation to run it there; pass compile_graph(..., "
+                f"implementation to run it there; define {name}.evaluate, pass compile_graph(..., "
                 f"evaluators={{{name}: function}}) or register a spiking motif for it "
                 "(docs/howto-op.md)", node=node)

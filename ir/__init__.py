@@ -21,9 +21,15 @@ Only the errors are imported with the package; every other name is imported on f
 use (PEP 562 ``__getattr__``).  The error hierarchy is the bottom layer every package
 imports (:mod:`radar` included), so ``import ir.errors`` must not load the graph, the
 ops and the interpreter — which themselves import :mod:`radar`
-(``tests/test_layers.py``).
+(``tests/test_layers.py``).  The op classes are not listed here: they are the classes
+of :data:`ir.ops.OP_REGISTRY`, so ``ir.Window`` and ``__all__`` follow the registry.
+
+>>> import ir
+>>> ir.Track is ir.OP_REGISTRY["track"], "Cluster" in ir.__all__
+(True, True)
 """
 
+# ruff: noqa: F401  (the names are re-exported through __all__, built on first use below)
 from __future__ import annotations
 
 from importlib import import_module
@@ -44,25 +50,7 @@ from ir.errors import (
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and readers
     from ir.graph import Graph
     from ir.interpreter import EVAL_REGISTRY, EvalRegistry, Implementation, check_input, evaluate
-    from ir.ops import (
-        CFAR,
-        DFT,
-        OP_REGISTRY,
-        AdcInput,
-        CfarWindow,
-        Classifier,
-        Input,
-        Linear,
-        Log,
-        Magnitude,
-        Op,
-        OpRegistry,
-        Output,
-        Sum,
-        Threshold,
-        Window,
-        make_registry,
-    )
+    from ir.ops import *  # noqa: F403  (the op classes of OP_REGISTRY, and its helpers)
     from ir.schema import chain_file_model, chain_schema
     from ir.serialize import (
         graph_from_dict,
@@ -79,9 +67,7 @@ _LAZY = {
     **dict.fromkeys(("EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input",
                      "evaluate"), "ir.interpreter"),
     "Graph": "ir.graph",
-    **dict.fromkeys(("CFAR", "DFT", "OP_REGISTRY", "AdcInput", "CfarWindow", "Classifier",
-                     "Input", "Linear", "Log", "Magnitude", "Op", "OpRegistry", "Output", "Sum",
-                     "Threshold", "Window", "make_registry"), "ir.ops"),
+    **dict.fromkeys(("OP_REGISTRY", "Op", "OpRegistry", "make_registry"), "ir.ops"),
     **dict.fromkeys(("chain_file_model", "chain_schema"), "ir.schema"),
     **dict.fromkeys(("graph_from_dict", "graph_from_json", "graph_from_yaml", "graph_to_dict",
                      "graph_to_json", "graph_to_yaml"), "ir.serialize"),
@@ -89,67 +75,35 @@ _LAZY = {
 }
 
 
+#: The names imported with the package.
+_ERRORS = ("ArtifactError", "BudgetError", "ChainFileError", "CompileError", "IRError",
+           "NetworkError", "RadarConfigError", "RadarSNNError", "SimulationError")
+
+
+def _op_names() -> list[str]:
+    """The class names of :data:`ir.ops.OP_REGISTRY` (imports the ops)."""
+    from ir.ops.registry import op_classes  # lazy: the ops import radar, which imports ir.errors
+
+    return list(op_classes(import_module("ir.ops").OP_REGISTRY))
+
+
 def __getattr__(name: str):
-    """Import a lazy name's module on first use (PEP 562) and keep the name here."""
-    module = _LAZY.get(name)
-    if module is None:
+    """Import a lazy name's module on first use (PEP 562) and keep the name here.
+
+    ``__all__`` is built on first use too: the errors, the lazy names and the op
+    classes of :data:`ir.ops.OP_REGISTRY`.
+    """
+    if name == "__all__":
+        value = [*_ERRORS, *_LAZY, *_op_names()]
+    elif name in _LAZY:
+        value = getattr(import_module(_LAZY[name]), name)
+    elif name[:1].isupper() and name in _op_names():
+        value = getattr(import_module("ir.ops"), name)
+    else:
         raise AttributeError(f"module 'ir' has no attribute {name!r}")
-    value = getattr(import_module(module), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
-
-
-__all__ = [
-    # errors
-    "ArtifactError",
-    "BudgetError",
-    "ChainFileError",
-    "CompileError",
-    "IRError",
-    "NetworkError",
-    "RadarConfigError",
-    "RadarSNNError",
-    "SimulationError",
-    # types
-    "DOMAINS",
-    "Domain",
-    "TensorType",
-    # ops
-    "CFAR",
-    "DFT",
-    "OP_REGISTRY",
-    "AdcInput",
-    "CfarWindow",
-    "Classifier",
-    "Input",
-    "Linear",
-    "Log",
-    "Magnitude",
-    "Op",
-    "OpRegistry",
-    "Output",
-    "Sum",
-    "Threshold",
-    "Window",
-    "make_registry",
-    # graphs and chain files
-    "Graph",
-    "chain_file_model",
-    "chain_schema",
-    "graph_from_dict",
-    "graph_from_json",
-    "graph_from_yaml",
-    "graph_to_dict",
-    "graph_to_json",
-    "graph_to_yaml",
-    # reference interpreter
-    "EVAL_REGISTRY",
-    "EvalRegistry",
-    "Implementation",
-    "check_input",
-    "evaluate",
-]
+    return sorted(set(globals()) | set(_LAZY) | set(_op_names()))

@@ -1,10 +1,10 @@
 """The reference interpreter: evaluate a graph on numpy arrays with the conventional DSP.
 
-Every op type has one implementation in an explicit registry,
-:data:`~ir.implementations.EVAL_REGISTRY` (op class -> function, in
-:mod:`ir.implementations`); :func:`evaluate` runs a graph node by node with it,
-plus any extra implementations it is given, and checks inputs and outputs
-against the inferred types.
+Every op type's reference implementation is its class's ``evaluate``; the
+built-in ones are gathered in :data:`~ir.implementations.EVAL_REGISTRY` (op class ->
+function, derived from the op registry).  :func:`evaluate` runs a graph node by node
+with it, plus any extra implementations it is given (which take precedence over an
+op's own), and checks inputs and outputs against the inferred types.
 
 Examples
 --------
@@ -33,9 +33,8 @@ from ir.graph import Graph
 from ir.implementations import EVAL_REGISTRY, EvalRegistry, Implementation
 from ir.limits import MAX_VALUE_BYTES, check_limit, check_value_sizes
 from ir.model import short_repr
-from ir.ops import (
-    Op,
-)
+from ir.ops import Op
+from ir.ops.registry import reference_implementation
 from ir.types import TensorType
 
 __all__ = ["EVAL_REGISTRY", "EvalRegistry", "Implementation", "check_input", "eval_registry",
@@ -196,7 +195,8 @@ def evaluate_node(node_id: str, op: Op, args: list[np.ndarray], types: list[Tens
     out_type : TensorType
         The node's inferred type; the result must have its shape and kind.
     registry : mapping of op class to implementation
-        Where the op's implementation is looked up (e.g. :func:`eval_registry`).
+        Where the op's implementation is looked up first (e.g. :func:`eval_registry`);
+        an op class it lacks is evaluated with its own ``evaluate``, if it has one.
 
     Returns
     -------
@@ -206,7 +206,8 @@ def evaluate_node(node_id: str, op: Op, args: list[np.ndarray], types: list[Tens
     Raises
     ------
     IRError
-        No implementation for the op's class, an implementation that fails with a
+        No implementation for the op's class (in ``registry`` or its own
+        ``evaluate``), an implementation that fails with a
         project error, or a result of the wrong shape or kind (naming the node).
 
     Examples
@@ -217,13 +218,13 @@ def evaluate_node(node_id: str, op: Op, args: list[np.ndarray], types: list[Tens
     ...               TensorType(axes={"range": 3}), EVAL_REGISTRY).tolist()
     [2.0, 2.0, 2.0]
     """
-    impl = registry.get(type(op))
+    impl = registry.get(type(op)) or reference_implementation(type(op))
     if impl is None:
         name = type(op).__name__
         raise IRError(
             f"node {node_id!r} ({op.op}): no implementation for {name}; pass "
             f"{{{name}: function}} as evaluate(..., registry=) or "
-            f"compile_graph(..., evaluators=) (docs/howto-op.md)",
+            f"compile_graph(..., evaluators=), or define {name}.evaluate (docs/howto-op.md)",
             node=node_id,
         )
     try:

@@ -29,7 +29,6 @@ from compiler.program import CompiledProgram
 from ir import Graph, evaluate
 from ir import errors as _errors
 from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
-from ir.ops import DFT, Input, Magnitude, Output, Window
 from radarsnn._chain import *  # noqa: F403  (every IR op, chains, radar presets, scenes)
 from radarsnn._chain import __all__ as _chain_names
 from radarsnn.compile import compile_graph
@@ -40,7 +39,7 @@ except PackageNotFoundError:  # run from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
 __all__ = [
-    "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
+    "CompiledProgram", "Graph", "__version__",
     "check_accuracy", "compile_graph",
     "evaluate", "load", "load_program", "run_program", "save", "save_program",
     "simulate", *_errors.__all__, *_chain_names,

@@ -1,6 +1,6 @@
-"""What a user needs to write a chain and feed it, under ``radarsnn``: the IR ops (with
-``DFT``, ``Input``, ``Magnitude``, ``Output``, ``Window`` of the package itself), the example
-chains, the radar presets and the scene simulator (re-exported by the package).
+"""What a user needs to write a chain and feed it, under ``radarsnn``: the IR ops (every
+class of :data:`ir.ops.OP_REGISTRY`, derived from it), the example chains, the radar
+presets and the scene simulator (re-exported by the package).
 
 Examples
 --------
@@ -23,12 +23,14 @@ Examples
 from __future__ import annotations
 
 from compiler.chains import range_chain, range_doppler_chain
-from ir.ops import CFAR, AdcInput, Add, Classifier, Cluster, Linear, Log, Sum, Threshold, Track
+from ir.ops import *  # noqa: F403  (the op classes; __all__ below exports those of the registry)
+from ir.ops import OP_REGISTRY
+from ir.ops.registry import op_classes
 from radar.config import PRESETS, RadarConfig, preset
 from radar.scene import SCENE_PRESETS, Scene, Target, simulate_frame, simulate_frames
 
 __all__ = [
-    "CFAR", "PRESETS", "SCENE_PRESETS", "Add", "AdcInput", "Classifier", "Cluster", "Linear",
-    "Log", "RadarConfig", "Scene", "Sum", "Target", "Threshold", "Track", "preset",
+    *op_classes(OP_REGISTRY),
+    "PRESETS", "SCENE_PRESETS", "RadarConfig", "Scene", "Target", "preset",
     "range_chain", "range_doppler_chain", "simulate_frame", "simulate_frames",
 ]

@@ -310,3 +310,36 @@ def test_default_registries_are_untouched_and_calls_do_not_leak() -> None:
     # … and the first program still runs with its own
     out = run_program(first, {"x": TONE}).outputs["out"]
     np.testing.assert_allclose(out, [0, 2, 0, 0, 0, 0, 0, 2], atol=1e-3)
+
+
+# -- the op's meaning on its class ------------------------------------------------------------
+
+
+class OwnScale(Scale):
+    """``Scale`` with its meaning on the class: no evaluators anywhere."""
+
+    def evaluate(self, node_id, args, types):
+        return self.factor * args[0]
+
+    def bound(self, node_id, bounds, types):
+        """``|c|`` times the bound."""
+        return abs(self.factor) * bounds[0]
+
+
+def test_an_op_class_with_its_own_meaning_compiles_and_runs_without_evaluators() -> None:
+    ops = {**OP_REGISTRY, "scale": OwnScale}
+    graph = Graph.from_dict(scaled_chain().to_dict(), registry=ops)
+    assert isinstance(graph.op("half"), OwnScale)
+    lowering = default_registry().copy()
+    lowering.register(OwnScale, "decoder", lower_scale, default=True)
+    golden = evaluate(graph, {"x": TONE})
+    assert golden["half"].tolist() == (0.5 * golden["rng"]).tolist()
+    # no calibration inputs: the bounds propagate through OwnScale.bound from input_bounds
+    program = compile_graph(graph, None, motifs={"half": "host"}, registry=lowering,
+                            options={"input_bounds": {"x": 1.0}})
+    assert program.evaluators == {} and "half" in program.host_nodes
+    half = program.records.calibration.nodes["half"]  # 0.5 · the 8-point DFT's 4·(1 + √2)
+    assert half.source == "bounds" and half.max_re == pytest.approx(2 * (1 + np.sqrt(2)))
+    values = run_program(program, {"x": TONE}).values
+    assert np.array_equal(values["half"], 0.5 * values["rng"])
+    assert OwnScale not in EVAL_REGISTRY

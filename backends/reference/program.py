@@ -262,7 +262,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     A host segment evaluates its node with :func:`ir.interpreter.evaluate_node`, looking
     the op up in :data:`ir.interpreter.EVAL_REGISTRY` plus the evaluators the program
     was compiled with (``compile_graph(..., evaluators=)``, kept in
-    ``program.evaluators``); a host node whose op has none raises
+    ``program.evaluators``), else the op class's own ``evaluate``; a host node whose op
+    has none raises
     :class:`~ir.errors.IRError` naming the node and the fix.
     """
     if not isinstance(program, CompiledProgram):

@@ -39,8 +39,6 @@ from compiler.snn import N_PARTS, PART_AXIS, PartLayout
 from ir.errors import CompileError
 from ir.ops import DFT, Linear, Op, Window
 from ir.types import TensorType
-from radar.dsp import dft_matrix
-from radar.windows import window_coefficients
 
 __all__ = [
     "PART_IN",
@@ -123,9 +121,10 @@ def dft_axes(node: str, op: DFT | Linear | Window, in_type: TensorType) -> DftAx
 def op_weights(op: Op, n_in: int, *, node: str = "") -> np.ndarray:
     r"""The complex matrix ``W`` (``n_out × n_in``) a ``dft``, ``linear`` or ``window`` applies.
 
-    For ``dft``: :func:`radar.dsp.dft_matrix` rows (``n_fft``, ``keep``, ``shift``)
-    times the folded window, ``W[k, l] = w[l]·e^{-2πi k_k l/N_fft}``.  For
-    ``linear``: ``matrix + 1j·matrix_imag``.  For ``window``: ``diag(w)``.
+    The op's own matrix (``Op.linear_map``): for ``dft``,
+    :func:`radar.dsp.dft_matrix` rows (``n_fft``, ``keep``, ``shift``) times the
+    folded window, ``W[k, l] = w[l]·e^{-2πi k_k l/N_fft}``; for ``linear``,
+    ``matrix + 1j·matrix_imag``; for ``window``, ``diag(w)``.
 
     Parameters
     ----------
@@ -152,18 +151,9 @@ def op_weights(op: Op, n_in: int, *, node: str = "") -> np.ndarray:
     >>> op_weights(DFT(axis="s", window="hann"), 3)[0].real.tolist()
     [0.0, 1.0, 0.0]
     """
-    if isinstance(op, DFT):
-        w = dft_matrix(n_in, n_fft=op.n_fft, keep=op.keep, shift=op.shift)
-        if op.window is not None:
-            w = w * window_coefficients(op.window, n_in)[None, :]
+    w = op.linear_map(n_in)
+    if w is not None:
         return w
-    if isinstance(op, Linear):
-        w = np.asarray(op.matrix, dtype=np.float64).astype(np.complex128)
-        if op.matrix_imag is not None:
-            w = w + 1j * np.asarray(op.matrix_imag, dtype=np.float64)
-        return w
-    if isinstance(op, Window):
-        return np.diag(window_coefficients(op.kind, n_in)).astype(np.complex128)
     raise CompileError(f"node {node!r}: op {op.op!r} has no weight matrix; spiking linear "
                        "motifs lower 'dft', 'linear' and 'window' only", node=node or None)
 

@@ -57,6 +57,10 @@ class LoweringRegistry:
         if default:
             self._defaults[op_type] = motif
 
+    def lowers(self, op_type: type[Op]) -> bool:
+        """Whether any rule is registered for ``op_type`` (beyond the generic host rule)."""
+        return bool(self._rules.get(op_type))
+
     def motifs(self, op_type: type[Op]) -> list[str]:
         """Motif names available for ``op_type`` (always including ``host``)."""
         return sorted({HOST, *self._rules.get(op_type, {})})

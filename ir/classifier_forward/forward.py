@@ -39,9 +39,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ir.classifier_forward.layers import LayerPlan, build_layer_plan
+from ir.classifier_forward.weights import load_weights
+from ir.errors import IRError
 from ir.ops.classify import Classifier
+from ir.types import TensorType
 
-__all__ = ["ForwardResult", "classify", "encode_frames", "run_plan"]
+__all__ = ["ForwardResult", "classify", "encode_frames", "evaluate_classifier", "run_plan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,3 +172,32 @@ def classify(op: Classifier, weights: Mapping[str, np.ndarray], rois: np.ndarray
     rois = np.asarray(rois, dtype=np.float64)
     plans = build_layer_plan(op, weights, rois.shape[-2:], node_id)
     return run_plan(plans, encode_frames(op, rois), binary_input=op.encoding.kind == "levels")
+
+
+def evaluate_classifier(node_id: str, op: Classifier, args: list[np.ndarray],
+                        types: list[TensorType]) -> np.ndarray:
+    """The ``classifier`` op's reference implementation (:meth:`Classifier.evaluate`).
+
+    The batch axes' ROI sequences are classified with :func:`classify` and the
+    weights file the op names; the scores keep the batch axes, then ``class``.
+
+    Raises
+    ------
+    IRError
+        For an opaque classifier (no ``layers``), naming the node.
+    """
+    if not op.layers:
+        raise IRError(
+            f"node {node_id!r} (classifier): classifier evaluation is not implemented yet for "
+            "an opaque classifier (no 'layers'); declare its layer stack and weights "
+            "(docs/classifier.md) or evaluate the graph up to its input instead",
+            node=node_id,
+        )
+    t = types[0]
+    batch = op.batch_axes(t)
+    order = [t.index(a) for a in (*batch, op.time_axis, *op.map_axes)]
+    x = np.transpose(args[0], order)
+    lead = x.shape[: len(batch)]
+    rois = x.reshape(-1, *x.shape[len(batch):])
+    scores = classify(op, load_weights(op, rois.shape, node_id), rois, node_id).scores
+    return scores.reshape(*lead, op.num_classes)

@@ -48,7 +48,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, FiniteFloat, PositiveInt, model_serializer, model_validator
@@ -223,6 +223,8 @@ class Classifier(Op):
     {'class': 4}
     """
 
+    no_bound: ClassVar[str] = ("scores of a trained network: bounded by its calibration, not by "
+                               "its input")
     op: Literal["classifier"] = "classifier"
     num_classes: int = Field(ge=2)
     weights: str = Field(min_length=1)
@@ -255,6 +257,12 @@ class Classifier(Op):
         if "class" in batch:
             raise self.fail(node_id, "a batch axis is named 'class', the output axis; rename it")
         return TensorType(axes={**batch, "class": self.num_classes})
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        """The numpy forward pass, :func:`ir.classifier_forward.evaluate_classifier`."""
+        # a cycle by construction: the forward pass reads this module's layer classes
+        from ir.classifier_forward.forward import evaluate_classifier
+        return evaluate_classifier(node_id, self, args, types)
 
     def batch_axes(self, t: TensorType) -> tuple[str, ...]:
         """Input axes other than the time and map axes, in input order."""

@@ -1,18 +1,24 @@
-"""Detection ops that compare values and output masks: ``cfar`` and ``threshold``."""
+"""Detection ops that compare values and output masks: ``cfar`` and ``threshold``.
+
+``cfar``'s reference implementation is :func:`radar.cfar.cfar`.  A mask has no
+calibration bound (:attr:`~ir.ops.base.Op.no_bound`).
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
+import numpy as np
 from pydantic import Field, FiniteFloat, NonNegativeInt, PositiveInt, model_validator
 
 from ir.model import Name
 from ir.ops.base import Op
 from ir.types import TensorType
 from radar import cfar_theory
+from radar.cfar import cfar
 
 __all__ = ["CFAR", "CfarWindow", "EdgeMode", "Threshold"]
 
@@ -110,6 +116,7 @@ class CFAR(Op):
     176
     """
 
+    no_bound: ClassVar[str] = "a comparison: a mask, not a value range"
     op: Literal["cfar"] = "cfar"
     kind: Literal["ca", "os"]
     axes: tuple[Name, ...] | None = Field(default=None, min_length=1)
@@ -206,6 +213,22 @@ class CFAR(Op):
         self.window(node_id, t)
         return t.replace(domain="mask")
 
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        win = self.window(node_id, types[0])
+        src = [types[0].index(a) for a in win.axes]
+        dst = list(range(-len(src), 0))
+        moved = np.moveaxis(args[0], src, dst)
+        det = cfar(
+            moved,
+            kind=self.kind,
+            guard=list(win.guard),
+            train=list(win.train),
+            alpha=self.alpha_for(win.n_train),
+            k=self.k,
+            edge=list(win.edge),
+        )
+        return np.moveaxis(det, dst, src)
+
 
 class Threshold(Op):
     r"""Fixed threshold: :math:`y = x > v` (``strict``) or :math:`y = x \ge v`.
@@ -228,6 +251,7 @@ class Threshold(Op):
     'mask'
     """
 
+    no_bound: ClassVar[str] = "a comparison: a mask, not a value range"
     op: Literal["threshold"] = "threshold"
     value: FiniteFloat
     strict: bool = True
@@ -236,3 +260,6 @@ class Threshold(Op):
         (t,) = self.expect_inputs(node_id, inputs)
         self.check_value(node_id, t, ("amplitude", "power", "db"), allow_complex=False)
         return t.replace(domain="mask")
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return args[0] > self.value if self.strict else args[0] >= self.value

@@ -1,14 +1,20 @@
-"""Elementwise ops: ``magnitude``, ``log`` (decibels) and ``add``."""
+"""Elementwise ops: ``magnitude``, ``log`` (decibels) and ``add``.
+
+Their reference implementations delegate to :mod:`radar.dsp`.
+"""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import ClassVar, Literal
 
+import numpy as np
 from pydantic import FiniteFloat
 
 from ir.ops.base import Op
 from ir.types import TensorType
+from radar.dsp import magnitude, to_db
 
 __all__ = ["Add", "Log", "Magnitude", "MagnitudeKind"]
 
@@ -50,6 +56,15 @@ class Magnitude(Op):
         domain = "power" if self.kind == "square" else "amplitude"
         return t.replace(complex=False, domain=domain)
 
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return magnitude(args[0], self.kind)
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """``l2``: √n·b, ``l1``: n·b, ``square``: n·b² (n = 2 parts for a complex input, else 1)."""
+        n = 2 if types[0].complex else 1
+        b = bounds[0]
+        return {"l2": math.sqrt(n) * b, "l1": n * b, "square": n * b * b}[self.kind]
+
 
 class Log(Op):
     r"""Level in decibels, floored: amplitude :math:`y = \max(20\log_{10}|x|, f)`,
@@ -72,6 +87,7 @@ class Log(Op):
     'db'
     """
 
+    no_bound: ClassVar[str] = "no useful worst case (log of a value near 0 is unbounded below)"
     op: Literal["log"] = "log"
     floor_db: FiniteFloat = -300.0
 
@@ -79,6 +95,9 @@ class Log(Op):
         (t,) = self.expect_inputs(node_id, inputs)
         self.check_value(node_id, t, ("amplitude", "power"), allow_complex=False)
         return t.replace(domain="db")
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return to_db(args[0], domain=types[0].domain, floor_db=self.floor_db)
 
 
 class Add(Op):
@@ -104,3 +123,10 @@ class Add(Op):
                                      f"({a.domain}) and {b.axes} ({b.domain})")
         self.check_value(node_id, a, ("amplitude", "power"), allow_complex=True)
         return a.replace(complex=a.complex or b.complex)
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return args[0] + args[1]
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """The sum of the two bounds."""
+        return bounds[0] + bounds[1]

@@ -2,7 +2,8 @@ r"""Host-only ops after detection: ``cluster`` (DBSCAN) and ``track`` (Kalman tr
 
 Both produce fixed-capacity *tables*: real ``amplitude`` values on named axes,
 one row per cluster or track slot, one column per feature.  Their meaning lives in
-:mod:`radar.clustering` and :mod:`radar.tracking`; the compiler has no spiking
+:mod:`radar.clustering` and :mod:`radar.tracking` (their reference implementations
+delegate there; a table has no calibration bound); the compiler has no spiking
 motif for them, so they always run on the host.  The column layouts are defined
 here, once: :data:`CLUSTER_FEATURES` and :data:`TRACK_STATE`.
 
@@ -22,13 +23,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import ClassVar, Literal
 
+import numpy as np
 from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt
 
 from ir.model import Name
 from ir.ops.base import Op
 from ir.types import TensorType
-from radar.clustering import FEATURES
-from radar.tracking import STATE
+from radar.clustering import FEATURES, cluster_detections
+from radar.tracking import STATE, track_sequence
 
 __all__ = ["CLUSTER_FEATURES", "TRACK_STATE", "Cluster", "Track"]
 
@@ -84,6 +86,7 @@ class Cluster(Op):
     """
 
     arity: ClassVar[int] = 1
+    no_bound: ClassVar[str] = "host-only: a table of detections, not a value"
     op: Literal["cluster"] = "cluster"
     axes: tuple[Name, Name] = ("range", "doppler")
     wrap: tuple[bool, bool] = (False, True)
@@ -118,6 +121,15 @@ class Cluster(Op):
                                      "'feature'; rename them upstream")
         return TensorType(axes={**batch, "cluster": self.max_clusters,
                                 "feature": len(CLUSTER_FEATURES)})
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        maps = [types[0].index(a) for a in self.axes]
+        moved = [np.moveaxis(np.asarray(a), maps, [-2, -1]) for a in args]
+        # a mask decoded from spikes may arrive as 0/1 floats (run_program's host segments)
+        return cluster_detections(moved[0] != 0, moved[1] if len(moved) == 2 else None,
+                                  eps_bins=self.eps_bins, min_samples=self.min_samples,
+                                  max_clusters=self.max_clusters, axes_scale=self.axes_scale,
+                                  wrap=self.wrap)
 
 
 class Track(Op):
@@ -163,6 +175,7 @@ class Track(Op):
     (3, 16, 7)
     """
 
+    no_bound: ClassVar[str] = "host-only: a table of tracks, not a value"
     op: Literal["track"] = "track"
     dt_s: PositiveFloat
     range_bin_m: PositiveFloat
@@ -192,3 +205,6 @@ class Track(Op):
                                      f"{self.frame_axis!r} batch axis")
         return TensorType(axes={self.frame_axis: t.axes[self.frame_axis],
                                 "track": self.max_tracks, "state": len(TRACK_STATE)})
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return track_sequence(args[0], **self.tracker_params())

@@ -1,10 +1,15 @@
-"""Graph inputs and outputs: ``adc_input``, ``input`` and ``output``."""
+"""Graph inputs and outputs: ``adc_input``, ``input`` and ``output``.
+
+Inputs have no reference implementation (their values are given to
+:func:`ir.interpreter.evaluate`) and no propagated calibration bound.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from typing import ClassVar, Literal
 
+import numpy as np
 from pydantic import Field, PositiveFloat, PositiveInt, model_validator
 
 from ir.model import Name
@@ -40,6 +45,7 @@ class AdcInput(Op):
     """
 
     arity: ClassVar[int] = 0
+    no_bound: ClassVar[str] = "a graph input: bounded by its ADC full scale, not propagated"
     op: Literal["adc_input"] = "adc_input"
     shape: dict[Name, PositiveInt] = Field(min_length=1)
     complex: bool = False
@@ -73,6 +79,7 @@ class Input(Op):
     """
 
     arity: ClassVar[int] = 0
+    no_bound: ClassVar[str] = "a graph input: bounded by the option input_bounds, not propagated"
     op: Literal["input"] = "input"
     shape: dict[Name, PositiveInt] = Field(min_length=1)
     complex: bool = False
@@ -100,8 +107,12 @@ class Output(Op):
     """
 
     is_output: ClassVar[bool] = True
+    no_bound: ClassVar[str] = "passes its input through; nothing is lowered for it"
     op: Literal["output"] = "output"
 
     def infer(self, node_id: str, inputs: Sequence[TensorType]) -> TensorType:
         (t,) = self.expect_inputs(node_id, inputs)
         return t
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return args[0]

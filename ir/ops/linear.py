@@ -2,7 +2,9 @@
 
 All act on one named axis and leave the other axes (and their order) alone.
 ``window``, ``dft`` and ``linear`` take ``amplitude`` values (real or complex);
-``sum`` also takes ``power`` values (non-coherent integration).
+``sum`` also takes ``power`` values (non-coherent integration).  Their reference
+implementations delegate to :mod:`radar.dsp` and :mod:`radar.windows`; the calibration
+bound of ``window``, ``dft`` and ``linear`` comes from their matrix (:meth:`DFT.linear_map`).
 """
 
 from __future__ import annotations
@@ -10,15 +12,24 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
+import numpy as np
 from pydantic import Field, FiniteFloat, PositiveInt, model_validator
 
 from ir.model import Name
 from ir.ops.base import Op
 from ir.types import TensorType
+from radar.dsp import dft, dft_matrix
+from radar.windows import apply_window, window_coefficients
 
 __all__ = ["DFT", "Linear", "Sum", "Window", "WindowKind"]
 
 WindowKind = Literal["hann", "hamming", "blackman", "rect"]
+
+
+def _matrix_bound(op: Op, bounds: list[float], types: list[TensorType]) -> float:
+    """The bound of ``y = W x``: ``b`` times the largest row sum of ``|Re W| + |Im W|``."""
+    w = op.linear_map(types[0].axes[op.axis])
+    return float((np.abs(w.real) + np.abs(w.imag)).sum(axis=1).max()) * bounds[0]
 
 
 class Window(Op):
@@ -55,6 +66,17 @@ class Window(Op):
         self.axis_index(node_id, t, self.axis)
         self.check_value(node_id, t, ("amplitude",), allow_complex=True)
         return t
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return apply_window(args[0], self.kind, axis=types[0].index(self.axis))
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """Keeps the bound (taps ``|w| <= 1``)."""
+        return bounds[0]
+
+    def linear_map(self, n_in: int) -> np.ndarray:
+        """``diag(w)``."""
+        return np.diag(window_coefficients(self.kind, n_in)).astype(np.complex128)
 
 
 class DFT(Op):
@@ -134,6 +156,29 @@ class DFT(Op):
             complex=True, domain="amplitude"
         )
 
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        ax = types[0].index(self.axis)
+        x = args[0] if self.window is None else apply_window(args[0], self.window, axis=ax)
+        return dft(x, axis=ax, n_fft=self.n_fft, keep=self.keep, shift=self.shift)
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """b times the largest row sum of ``|Re W| + |Im W|`` (``W``: :meth:`linear_map`)."""
+        return _matrix_bound(self, bounds, types)
+
+    def linear_map(self, n_in: int) -> np.ndarray:
+        r""":func:`radar.dsp.dft_matrix` rows times the folded window,
+        ``W[k, l] = w[l]·e^{-2πi k_k l/N_fft}``.
+
+        Examples
+        --------
+        >>> (DFT(axis="s", keep="positive").linear_map(4).round(12) + 0).tolist()
+        [[(1+0j), (1+0j), (1+0j), (1+0j)], [(1+0j), -1j, (-1+0j), 1j]]
+        """
+        w = dft_matrix(n_in, n_fft=self.n_fft, keep=self.keep, shift=self.shift)
+        if self.window is not None:
+            w = w * window_coefficients(self.window, n_in)[None, :]
+        return w
+
 
 class Linear(Op):
     r"""A dense linear map along one axis: :math:`y[j] = \sum_i (A[j,i] + i\,B[j,i])\, x[i]`.
@@ -208,6 +253,24 @@ class Linear(Op):
             complex=t.complex or self.matrix_imag is not None, domain="amplitude"
         )
 
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        matrix = np.asarray(self.matrix, dtype=np.float64)
+        if self.matrix_imag is not None:
+            matrix = matrix + 1j * np.asarray(self.matrix_imag, dtype=np.float64)
+        ax = types[0].index(self.axis)
+        return np.moveaxis(np.tensordot(matrix, args[0], axes=([1], [ax])), 0, ax)
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """b times the largest row sum of ``|Re W| + |Im W|`` (``W``: :meth:`linear_map`)."""
+        return _matrix_bound(self, bounds, types)
+
+    def linear_map(self, n_in: int) -> np.ndarray:
+        """``matrix + 1j·matrix_imag``."""
+        w = np.asarray(self.matrix, dtype=np.float64).astype(np.complex128)
+        if self.matrix_imag is not None:
+            w = w + 1j * np.asarray(self.matrix_imag, dtype=np.float64)
+        return w
+
 
 class Sum(Op):
     r"""Sum over one axis and drop it: :math:`y = \sum_i x[i]`.
@@ -240,3 +303,10 @@ class Sum(Op):
                 node_id, f"cannot sum out {self.axis!r}: it is the only axis of the input"
             )
         return t.drop_axis(self.axis)
+
+    def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
+        return args[0].sum(axis=types[0].index(self.axis))
+
+    def bound(self, node_id: str, bounds: list[float], types: list) -> float:
+        """The axis length times the bound."""
+        return types[0].axes[self.axis] * bounds[0]
