@@ -253,7 +253,7 @@ class Place(Pass):
                                "of traffic, placer")
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        profile = load_profile(ctx.target)
+        profile = ctx.target
         mode = self.repetitions
         networks = program.networks
         splits = program.records.splits or split_program(networks, profile, mode)

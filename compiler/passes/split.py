@@ -276,7 +276,7 @@ class Split(Pass):
         repetition_mode(self.repetitions)
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        profile = load_profile(ctx.target)
+        profile = ctx.target
         mode = self.repetitions
         ctx.progress(self.name, f"{len(program.networks)} network(s), repetitions={mode}")
         program.records.splits = split_program(program.networks, profile, mode)
