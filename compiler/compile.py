@@ -54,8 +54,8 @@ from ir.frames import n_frames
 from ir.interpreter import EvalRegistry, eval_registry
 from ir.model import short_repr
 
-__all__ = ["EXTRA_OPTIONS", "calibrate_pass", "compile_graph", "default_pipeline", "lower_pass",
-           "motif_settings"]
+__all__ = ["EXTRA_OPTIONS", "TargetSpec", "calibrate_pass", "compile_graph", "default_pipeline",
+           "lower_pass", "motif_settings"]
 
 #: What ``compile_graph``'s ``target`` takes: a built-in name, a YAML path, a profile, or
 #: None (no target: no allocation passes; the lowering reads
