@@ -108,6 +108,26 @@ class CompiledProgram:
             self.records.update(given)
 
     @property
+    def sized_for(self) -> HardwareProfile:
+        """The profile the report sizes the program against: its target, or the built-in
+        ``unbounded`` profile (no budgets) for a program compiled without one.
+
+        Examples
+        --------
+        >>> from ir import Graph
+        >>> g = Graph.from_dict({"name": "x", "nodes": [
+        ...     {"id": "a", "op": "input", "shape": {"range": 4}},
+        ...     {"id": "o", "op": "output", "input": "a"}]})
+        >>> CompiledProgram(graph=g).sized_for.name
+        'unbounded'
+        """
+        if self.target is not None:
+            return self.target
+        from compiler.hardware.loading import load_profile  # the package imports programs' parts
+
+        return load_profile("unbounded")
+
+    @property
     def networks(self) -> list[SpikingNetwork]:
         """The spiking segments' networks, in execution order."""
         return [s.network for s in self.segments if s.kind == "spiking"]

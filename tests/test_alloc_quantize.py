@@ -58,7 +58,7 @@ def test_hand_worked_scale_and_errors():
 
 def test_unbounded_changes_nothing():
     net = small(np.array([[0.3]]))
-    q, rec = quantize(net, None)
+    q, rec = quantize(net, "unbounded")
     assert q.projection["w"].weights.tolist() == [[0.3]] and rec.projections == {}
 
 

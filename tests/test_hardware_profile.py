@@ -38,7 +38,7 @@ def test_other_builtins():
     assert load_profile("loihi2").neurons_per_core == 8192
     assert load_profile("spinnaker2").cores_per_chip == 152
     assert load_profile("spinnaker2").neurons_per_core == 256
-    u = load_profile(None)
+    u = load_profile("unbounded")
     assert u.name == "unbounded" and u.n_cores is None and u.number_format.max_delay_steps is None
     assert np.isinf(u.limits()).all()
 

@@ -91,6 +91,17 @@ def test_required_fields_keep_the_file_order():
     assert set(NUMBER_FORMAT_FIELDS) <= set(REQUIRED_FIELDS)
 
 
+def test_none_is_no_profile():
+    with pytest.raises(CompileError, match="profile name, a YAML path or a HardwareProfile; "
+                                           "got NoneType None"):
+        load_profile(None)
+    from compiler.passes.quantize import quantize
+    from compiler.program import CompiledProgram
+
+    assert CompiledProgram(graph=Graph.from_dict(CHAIN)).sized_for == load_profile("unbounded")
+    assert quantize.__defaults__ == ("unbounded",)  # by name, not None
+
+
 def test_the_context_holds_a_loaded_profile_never_none():
     assert CompileContext().target is NO_TARGET
     assert CompileContext(target="loihi").target == load_profile("loihi")

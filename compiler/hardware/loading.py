@@ -55,14 +55,17 @@ from ir.serialize import describe_yaml_error
 __all__ = ["load_profile"]
 
 
-def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile:
-    """A built-in profile by name, a profile from a YAML file, or ``unbounded`` for ``None``.
+def load_profile(target: str | Path | HardwareProfile) -> HardwareProfile:
+    """A built-in profile or board by name, or a profile from a YAML file (a profile: itself).
 
     Parameters
     ----------
-    target : str, Path, HardwareProfile or None
-        A name in :data:`BUILTIN_PROFILES`, or a path to a YAML file (a ``str``
-        ending in ``.yaml``/``.yml`` counts as a path).
+    target : str, Path or HardwareProfile
+        A name in :data:`~compiler.hardware.profile.BUILTIN_PROFILES` or
+        :data:`~compiler.hardware.profile.BUILTIN_BOARDS` (``unbounded``: no budgets), or a
+        path to a YAML file (a ``str`` ending in ``.yaml``/``.yml`` counts as a path).
+        ``None`` is refused: it is no profile (a compile without a target is
+        ``compile_graph(..., target=None)``).
 
     Returns
     -------
@@ -80,6 +83,11 @@ def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile
     >>> b = load_profile("kapoho_point")
     >>> b.chip_profile, b.chips, b.n_cores, b.neurons_per_core
     ('loihi2', 8, 1024, 8192)
+    >>> load_profile(None)
+    Traceback (most recent call last):
+    ...
+    ir.errors.CompileError: hardware target must be a profile name, a YAML path or a \
+HardwareProfile; got NoneType None
     >>> load_profile("tpu")
     Traceback (most recent call last):
     ...
@@ -89,8 +97,6 @@ give a path to a YAML profile file
     """
     if isinstance(target, HardwareProfile):
         return target
-    if target is None:
-        target = "unbounded"
     if isinstance(target, str) and target in BUILTIN_PROFILES:
         text = resources.files("compiler.hardware").joinpath(f"profiles/{target}.yaml")
         return _from_text(text.read_text(encoding="utf-8"), f"built-in profile {target!r}")

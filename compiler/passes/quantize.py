@@ -264,7 +264,7 @@ def _projection_terms(p, pop: Population, unit: float, exact: bool,
     return out
 
 
-def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
+def quantize(network: SpikingNetwork, profile: HardwareProfile | str = "unbounded", *,
              long_delays: LongDelays = "error") -> tuple[SpikingNetwork, QuantizeRecord]:
     """Quantize ``network`` to the profile's weight, threshold, bias and delay formats.
 
@@ -272,8 +272,9 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     ----------
     network : SpikingNetwork
         A validated network.
-    profile : HardwareProfile, optional
-        The target (``None``: ``unbounded``, which changes nothing).
+    profile : HardwareProfile or str, default "unbounded"
+        The target: a profile, or a built-in name or YAML path (loaded);
+        ``unbounded`` changes nothing.
     long_delays : {"error", "relay"}
         What to do with a delay beyond the profile's maximum.
 

@@ -32,8 +32,6 @@ Examples
 
 from __future__ import annotations
 
-from compiler.hardware import load_profile
-
 __all__ = ["format_rows"]
 
 
@@ -44,7 +42,7 @@ def _instances(net, proj) -> int:
 
 def format_rows(program) -> list[dict]:
     """Rows ``{node, item, mechanism, detail, cost}`` for the report (see the module doc)."""
-    profile = load_profile(program.target)
+    profile = program.sized_for
     records = program.records.quantization
     rows: list[dict] = []
     for k, net in enumerate(program.networks):
