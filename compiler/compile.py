@@ -85,7 +85,10 @@ def compile_graph(graph: Graph | str | Path, target: TargetSpec = "loihi2", *,
         A built-in profile name (``loihi``, ``loihi2``, ``spinnaker2``,
         ``unbounded``), a YAML profile path, a profile object, or None (no
         allocation passes: the spiking network and host segments only, for
-        accuracy studies where the chip does not matter).
+        accuracy studies where the chip does not matter; the lowering reads
+        :data:`~compiler.hardware.NO_TARGET`). Loaded once, here: every pass and
+        lowering rule reads the same :class:`~compiler.hardware.HardwareProfile`
+        (``ctx.target``), and so does every compile of a measured search.
     motifs : mapping, optional
         Motif per node id or op name (e.g. ``{"dft": "time", "mag": "host"}``).
     calibration : {"static", "per-input"}
@@ -258,8 +261,7 @@ def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
             raise CompileError(f"compile_graph: progress={progress!r:.60} is not callable; give "
                                "a function progress(pass_name, message) or None")
         ctx.progress = progress
-    program = CompiledProgram(graph=graph, options=options,
-                              target=None if target is None else profile,
+    program = CompiledProgram(graph=graph, options=options, target=target,
                               calibration_policy=calibration)
     program = run_pipeline(default_pipeline(options, hardware=target is not None), ctx, program)
     _check_host_implementations(program, impls)
