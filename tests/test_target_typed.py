@@ -83,6 +83,11 @@ def test_a_bad_number_format_field_in_a_file_is_named_flat(tmp_path):
         load_profile(path)
 
 
+def test_file_fields_are_the_profiles_fields():
+    fields = {*HardwareProfile.model_fields, *NUMBER_FORMAT_FIELDS} - {"number_format"}
+    assert len(FILE_FIELDS) == len(set(FILE_FIELDS)) and set(FILE_FIELDS) == fields
+
+
 def test_required_fields_keep_the_file_order():
     assert REQUIRED_FIELDS[:9] == ("cores_per_chip", "chips", "neurons_per_core",
                                    "input_axons_per_core", "output_axons_per_core",

@@ -189,9 +189,10 @@ class HardwareProfile(BaseModel):
         data = handler(self)
         if not isinstance(data, dict) or not isinstance(data.get("number_format"), dict):
             return data  # a partial dump (include/exclude): as pydantic made it
-        fmt = data.pop("number_format")
-        data = {k: fmt[k] if k in fmt else data[k] for k in FILE_FIELDS
-                if k in fmt or k in data}
+        flat = {**data.pop("number_format"), **data}
+        # a field FILE_FIELDS lacks is still saved, last (tests/test_target_typed.py: none is)
+        order = [*FILE_FIELDS, *(k for k in flat if k not in FILE_FIELDS)]
+        data = {k: flat[k] for k in order if k in flat}
         for key in OPTIONAL_FIELDS:
             if data.get(key) is None:
                 data.pop(key, None)
