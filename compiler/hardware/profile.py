@@ -187,12 +187,13 @@ class HardwareProfile(BaseModel):
     @model_serializer(mode="wrap")
     def _flat_without_unset_optional_fields(self, handler):
         data = handler(self)
-        if not isinstance(data, dict) or not isinstance(data.get("number_format"), dict):
-            return data  # a partial dump (include/exclude): as pydantic made it
-        flat = {**data.pop("number_format"), **data}
-        # a field FILE_FIELDS lacks is still saved, last (tests/test_target_typed.py: none is)
-        order = [*FILE_FIELDS, *(k for k in flat if k not in FILE_FIELDS)]
-        data = {k: flat[k] for k in order if k in flat}
+        if not isinstance(data, dict):
+            return data
+        if isinstance(data.get("number_format"), dict):  # absent: excluded from a partial dump
+            flat = {**data.pop("number_format"), **data}
+            # a field FILE_FIELDS lacks is still saved, last (tests/test_target_typed.py: none)
+            order = [*FILE_FIELDS, *(k for k in flat if k not in FILE_FIELDS)]
+            data = {k: flat[k] for k in order if k in flat}
         for key in OPTIONAL_FIELDS:
             if data.get(key) is None:
                 data.pop(key, None)
