@@ -28,27 +28,24 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ValidationError
 
 from compiler.accuracy.check import check_program
 from compiler.accuracy.contract import Tolerances, split_folds
 from compiler.accuracy.select import ops_to_search, search
 from compiler.accuracy.simulator import Simulator
 from compiler.compile_guards import check_compile, limits_from_options
-from compiler.hardware import load_profile
+from compiler.hardware import NO_TARGET, HardwareProfile, load_profile
 from compiler.lowering import LoweringRegistry, default_registry
-from compiler.lowering.options import MOTIF_OPTION_MODELS
 from compiler.option_checks import check_options
-from compiler.passes import CompileContext, Pass, Verify, run_pipeline
+from compiler.passes import CompileContext, run_pipeline
 from compiler.passes.base import Progress
-from compiler.passes.calibrate import Calibrate
-from compiler.passes.fuse_linear import FuseLinear
-from compiler.passes.lower import Lower
-from compiler.passes.place import Place
-from compiler.passes.quantize import Quantize
-from compiler.passes.report import ReportPass
-from compiler.passes.split import Split
-from compiler.passes.static_split import StaticSplit, StaticSplitOptions
+from compiler.pipeline import (
+    EXTRA_OPTIONS,
+    calibrate_pass,
+    default_pipeline,
+    lower_pass,
+    motif_settings,
+)
 from compiler.program import CompiledProgram
 from compiler.report import add_measured_activity
 from ir import Graph
@@ -57,146 +54,16 @@ from ir.frames import n_frames
 from ir.interpreter import EvalRegistry, eval_registry
 from ir.model import short_repr
 
-__all__ = ["calibrate_pass", "compile_graph", "default_pipeline", "lower_pass", "motif_settings"]
+__all__ = ["EXTRA_OPTIONS", "TargetSpec", "calibrate_pass", "compile_graph", "default_pipeline",
+           "lower_pass", "motif_settings"]
+
+#: What ``compile_graph``'s ``target`` takes: a built-in name, a YAML path, a profile, or
+#: None (no target: no allocation passes; the lowering reads
+#: :data:`~compiler.hardware.NO_TARGET`).
+TargetSpec = str | Path | HardwareProfile | None
 
 
-#: Options ``compile_graph`` accepts in ``options=`` besides its named arguments.
-EXTRA_OPTIONS = {
-    "headroom": "calibration headroom factor >= 1 (static policy)",
-    "input_bounds": "{input node id: max |value|} when no calibration inputs are given",
-    "long_delays": "quantize: 'relay' (default) or 'error' for delays beyond the target's maximum",
-    "repetitions": "split/place: 'auto' | 'spatial' | 'temporal' (time-multiplex repeated stages)",
-    "frame_rate_hz": "report: frames per second (default from the chain or 10)",
-    "real_bits": "report: bits per real sample of frame I/O (default 16)",
-    "n_angle_bins": "report: angle bins of an RA map the chain does not compute (CARRADA: 256; "
-                    "default none: an ra_map row only when the chain computes one)",
-    "max_memory_bytes": "refuse chains whose estimated compile memory exceeds this, bytes",
-    "max_time_s": "refuse chains whose estimated compile time exceeds this, s",
-    # typed fields of their pass or motif (the description says what the value must be);
-    # time_steps, weight_bits and calibration are compile_graph's named arguments
-    **{n: f"{f.description} — {(m.__doc__ or '').splitlines()[0]}"
-       for m in (StaticSplitOptions, *MOTIF_OPTION_MODELS) for n, f in m.model_fields.items()
-       if n not in ("time_steps", "weight_bits", "calibration", "headroom")},
-}
-
-
-def motif_settings(options: Mapping[str, Any]) -> dict[type[BaseModel], BaseModel]:
-    """Every model of :data:`~compiler.lowering.options.MOTIF_OPTION_MODELS` filled from
-    ``options`` (None: the default).
-
-    Examples
-    --------
-    >>> from compiler.lowering.options import CfarOptions, RateOptions
-    >>> settings = motif_settings({"time_steps": 64, "cfar_ties": "exact"})
-    >>> settings[CfarOptions].time_steps, settings[CfarOptions].cfar_ties
-    (64, 'exact')
-    >>> motif_settings({})[RateOptions].time_steps, motif_settings({})[CfarOptions].time_steps
-    (2000, 100)
-    >>> motif_settings({"cfar_ties": "often"})
-    Traceback (most recent call last):
-    ...
-    ir.errors.CompileError: compile option cfar_ties='often' must be balanced or exact
-
-    Raises
-    ------
-    CompileError
-        A value its field refuses, naming the option, the value and the rule.
-    """
-    out: dict[type[BaseModel], BaseModel] = {}
-    for model in MOTIF_OPTION_MODELS:
-        given = {k: options[k] for k in model.model_fields if options.get(k) is not None}
-        try:
-            out[model] = model.model_validate(given)
-        except ValidationError as err:
-            name = str(err.errors()[0]["loc"][0])
-            what = model.model_fields[name].description or name
-            raise CompileError(f"compile option {name}={short_repr(given[name])} must be "
-                               f"{what}") from None
-    return out
-
-
-def calibrate_pass(options: Mapping[str, Any]) -> Calibrate:
-    """The ``calibrate`` pass with its fields from compile options (absent: the defaults).
-
-    Examples
-    --------
-    >>> calibrate_pass({"calibration": "per-input", "headroom": 1.5}).policy
-    'per-input'
-    """
-    opts = {k: v for k, v in options.items() if v is not None}
-    return Calibrate(policy=str(opts.get("calibration", "static")),
-                     headroom=float(opts.get("headroom", 1.0)),
-                     input_bounds=tuple((str(k), float(v))
-                                        for k, v in dict(opts.get("input_bounds", {})).items()),
-                     max_memory_bytes=limits_from_options(opts)[0])
-
-
-def lower_pass(options: Mapping[str, Any]) -> Lower:
-    """The ``lower`` pass with the user's motifs and every motif's typed options.
-
-    Raises
-    ------
-    CompileError
-        A motif option its field refuses (:func:`motif_settings`).
-
-    Examples
-    --------
-    >>> from compiler.lowering.options import CfarOptions
-    >>> p = lower_pass({"motifs": {"dft": "rate"}, "time_steps": 64})
-    >>> p.motifs, next(s for s in p.settings if isinstance(s, CfarOptions)).time_steps
-    ((('dft', 'rate'),), 64)
-    """
-    opts = {k: v for k, v in options.items() if v is not None}
-    return Lower(motifs=tuple(sorted(dict(opts.get("motifs", {})).items())),
-                 settings=tuple(motif_settings(opts).values()))
-
-
-def default_pipeline(options: Mapping[str, Any], *, hardware: bool = False) -> list[Pass]:
-    """The passes ``compile_graph`` runs, in order (the allocation passes need a target).
-
-    The one place where the compile options become the passes' typed fields (a pass
-    never reads the options mapping); the motifs' own options reach them through
-    :class:`~compiler.lowering.LoweringContext`.
-
-    Parameters
-    ----------
-    options : mapping
-        Checked compile options (:func:`compiler.option_checks.check_options`); absent
-        ones take the pass's default.
-    hardware : bool
-        Add the allocation passes (quantize, split, place, report).
-
-    Raises
-    ------
-    CompileError
-        A pass refuses its option's value (e.g. an unknown calibration policy).
-
-    Examples
-    --------
-    >>> [p.name for p in default_pipeline({"calibration": "per-input"})]
-    ['verify', 'fuse-linear', 'static-split', 'calibrate', 'lower']
-    >>> default_pipeline({"headroom": 2})[3].headroom
-    2.0
-    """
-    opts = {k: v for k, v in options.items() if v is not None}
-    split = StaticSplitOptions.model_validate(
-        {k: opts[k] for k in StaticSplitOptions.model_fields if k in opts})
-    passes: list[Pass] = [
-        Verify(), FuseLinear(),
-        StaticSplit(mode=split.static_split,
-                    motifs=tuple(sorted(dict(opts.get("motifs", {})).items()))),
-        calibrate_pass(opts), lower_pass(opts)]
-    if hardware:
-        mode = str(opts.get("repetitions", "auto"))
-        passes += [Quantize(long_delays=opts.get("long_delays", "relay")),
-                   Split(repetitions=mode), Place(repetitions=mode),
-                   ReportPass(frame_rate_hz=opts.get("frame_rate_hz"),
-                              real_bits=int(opts.get("real_bits", 16)),
-                              n_angle_bins=opts.get("n_angle_bins"))]
-    return passes
-
-
-def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
+def compile_graph(graph: Graph | str | Path, target: TargetSpec = "loihi2", *,
                   motifs: Mapping[str, str] | None = None, calibration: str = "static",
                   calibration_inputs: Mapping[str, np.ndarray] | None = None,
                   time_steps: int | None = None, weight_bits: int | None = None,
@@ -218,7 +85,10 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         A built-in profile name (``loihi``, ``loihi2``, ``spinnaker2``,
         ``unbounded``), a YAML profile path, a profile object, or None (no
         allocation passes: the spiking network and host segments only, for
-        accuracy studies where the chip does not matter).
+        accuracy studies where the chip does not matter; the lowering reads
+        :data:`~compiler.hardware.NO_TARGET`). Loaded once, here: every pass and
+        lowering rule reads the same :class:`~compiler.hardware.HardwareProfile`
+        (``ctx.target``), and so does every compile of a measured search.
     motifs : mapping, optional
         Motif per node id or op name (e.g. ``{"dft": "time", "mag": "host"}``).
     calibration : {"static", "per-input"}
@@ -281,6 +151,8 @@ def compile_graph(graph: Graph | str | Path, target: Any = "loihi2", *,
         graph = Graph.from_yaml(Path(graph))
     if accuracy not in ("error", "warn", "off"):
         raise CompileError(f"accuracy={short_repr(accuracy)} must be error, warn or off")
+    if target is not None:  # loaded once: every compile of a search reads the same profile
+        target = load_profile(target)
     once = dict(target=target, calibration=calibration, registry=registry,
                 evaluators=evaluators, progress=progress)
     if simulator is None or accuracy == "off":
@@ -354,7 +226,7 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
     return program
 
 
-def _compile_once(graph: Graph | str | Path, target: Any = "loihi2", *,
+def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
                   motifs: Mapping[str, str] | None = None, calibration: str = "static",
                   calibration_inputs: Mapping[str, np.ndarray] | None = None,
                   time_steps: int | None = None, weight_bits: int | None = None,
@@ -377,7 +249,7 @@ def _compile_once(graph: Graph | str | Path, target: Any = "loihi2", *,
         impls = eval_registry(evaluators)
     except IRError as err:
         raise CompileError(f"compile_graph: {err}") from None
-    profile = None if target is None else load_profile(target)
+    profile = NO_TARGET if target is None else target  # typed, the same for every pass
     options = {**dict(options or {}), "motifs": dict(motifs or {}), "calibration": calibration,
                "time_steps": time_steps, "weight_bits": weight_bits}
     ctx = CompileContext(target=profile,
@@ -389,9 +261,9 @@ def _compile_once(graph: Graph | str | Path, target: Any = "loihi2", *,
             raise CompileError(f"compile_graph: progress={progress!r:.60} is not callable; give "
                                "a function progress(pass_name, message) or None")
         ctx.progress = progress
-    program = CompiledProgram(graph=graph, options=options, target=profile,
+    program = CompiledProgram(graph=graph, options=options, target=target,
                               calibration_policy=calibration)
-    program = run_pipeline(default_pipeline(options, hardware=profile is not None), ctx, program)
+    program = run_pipeline(default_pipeline(options, hardware=target is not None), ctx, program)
     _check_host_implementations(program, impls)
     return program
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from compiler.hardware.profile import HardwareProfile
 from compiler.program_records import ProgramRecords
 from compiler.snn import SpikingNetwork
 from ir import Graph
@@ -80,8 +81,9 @@ class CompiledProgram:
         ``records.placement``, ``records.report``, ``records.timings`` …;
         :mod:`compiler.program_records`); a mapping by pass name given here is
         converted.
-    target : object, optional
-        The hardware profile compiled for.
+    target : HardwareProfile or None
+        The hardware profile compiled for, loaded (None: compiled without a target — no
+        allocation passes; the lowering read :data:`~compiler.hardware.NO_TARGET`).
     evaluators : dict, optional
         Reference implementations (op class → function) of ops the built-in
         ``ir.EVAL_REGISTRY`` lacks, given to ``compile_graph(..., evaluators=)``:
@@ -96,7 +98,7 @@ class CompiledProgram:
     segments: list[Segment] = field(default_factory=list)
     options: dict[str, Any] = field(default_factory=dict)
     records: ProgramRecords = field(default_factory=ProgramRecords)
-    target: Any = None
+    target: HardwareProfile | None = None
     evaluators: dict[type, Any] = field(default_factory=dict)
     calibration_policy: Literal["static", "per-input"] = "static"
 
@@ -104,6 +106,26 @@ class CompiledProgram:
         if not isinstance(self.records, ProgramRecords):  # a mapping by pass name
             given, self.records = dict(self.records), ProgramRecords()
             self.records.update(given)
+
+    @property
+    def sized_for(self) -> HardwareProfile:
+        """The profile the report sizes the program against: its target, or the built-in
+        ``unbounded`` profile (no budgets) for a program compiled without one.
+
+        Examples
+        --------
+        >>> from ir import Graph
+        >>> g = Graph.from_dict({"name": "x", "nodes": [
+        ...     {"id": "a", "op": "input", "shape": {"range": 4}},
+        ...     {"id": "o", "op": "output", "input": "a"}]})
+        >>> CompiledProgram(graph=g).sized_for.name
+        'unbounded'
+        """
+        if self.target is not None:
+            return self.target
+        from compiler.hardware.loading import load_profile  # the package imports programs' parts
+
+        return load_profile("unbounded")
 
     @property
     def networks(self) -> list[SpikingNetwork]:

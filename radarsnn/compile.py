@@ -13,13 +13,14 @@ from __future__ import annotations
 from typing import Any
 
 from backends.reference import ReferenceSimulator
+from compiler.compile import TargetSpec
 from compiler.compile import compile_graph as _compile_graph
 from compiler.program import CompiledProgram
 
 __all__ = ["compile_graph"]
 
 
-def compile_graph(graph: Any, target: Any = "loihi2", *, simulator: Any = None,
+def compile_graph(graph: Any, target: TargetSpec = "loihi2", *, simulator: Any = None,
                   accuracy: str = "error", **kwargs: Any) -> CompiledProgram:
     """:func:`compiler.compile.compile_graph` measured by ``simulator`` (default: the reference).
 

@@ -58,7 +58,7 @@ def test_hand_worked_scale_and_errors():
 
 def test_unbounded_changes_nothing():
     net = small(np.array([[0.3]]))
-    q, rec = quantize(net, None)
+    q, rec = quantize(net, "unbounded")
     assert q.projection["w"].weights.tolist() == [[0.3]] and rec.projections == {}
 
 
@@ -68,7 +68,7 @@ def test_threshold_beyond_its_range_coarsens_the_weights():
     net, rec = quantize(small(np.array([[0.3]]), v_th=400.0), load_profile("loihi"))
     info = rec.populations[net.populations[1].id]
     assert info["weights_coarsened_for_threshold"] and not info["exact"]
-    assert net.populations[1].params.v_th <= load_profile("loihi").threshold_max
+    assert net.populations[1].params.v_th <= load_profile("loihi").number_format.threshold_max
     assert net.projections[0].weights[0, 0] == 98.0  # rint(0.3 / (400 / 131070.5))
 
 
@@ -101,7 +101,7 @@ def test_relay_chains_deliver_every_spike_at_the_same_step(delays, bits, x):
     prof = HardwareProfile(name="d", delay_bits=bits)
     relayed, rec = quantize(net, prof, long_delays="relay")
     relayed.validate()
-    assert all(p.max_delay <= prof.max_delay_steps for p in relayed.projections)
+    assert all(p.max_delay <= prof.number_format.max_delay_steps for p in relayed.projections)
     a = simulate(net, {"x": np.array(x)})
     b = simulate(relayed, {"x": np.array(x)})
     np.testing.assert_array_equal(a.first_spike_steps["y"], b.first_spike_steps["y"])

@@ -202,12 +202,13 @@ def test_profile_neuron_fields_are_typed(tmp_path) -> None:
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(doc))
     with pytest.raises(CompileError, match=r"field 'reset' = 'sometimes'"):
         load_profile(tmp_path / "p.yaml")
-    assert (LOIHI.current_decay_offset_lsb, LOIHI.reset, LOIHI.fire_once) == (1, "zero", "none")
+    offset = LOIHI.number_format.current_decay_offset_lsb
+    assert (offset, LOIHI.reset, LOIHI.fire_once) == (1, "zero", "none")
     assert not (LOIHI.threshold_schedule or LOIHI.input_gate or LOIHI.resonate_and_fire)
     for name in ("loihi2", "spinnaker2", "unbounded"):
         p = load_profile(name)
-        assert (p.current_decay_offset_lsb, p.reset, p.fire_once) == (0, "programmable",
-                                                                       "programmable")
+        assert (p.number_format.current_decay_offset_lsb, p.reset, p.fire_once) == (
+            0, "programmable", "programmable")
 
 
 def _ramp(reset: str, weight: float, bits: int | None = 4) -> SpikingNetwork:

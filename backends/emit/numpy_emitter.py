@@ -94,7 +94,7 @@ code imports (standard library or numpy); choose another name, e.g. 'snn_json'
 
 def _target_name(program: CompiledProgram | None, networks: list[SpikingNetwork]) -> str:
     if program is not None and program.target is not None:
-        return str(getattr(program.target, "name", program.target))
+        return program.target.name
     metas = [n.meta for n in networks]
     return str(next((m.get("quantized_for") or m.get("target") for m in metas
                      if m.get("quantized_for") or m.get("target")), "none"))

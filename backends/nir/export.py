@@ -295,7 +295,7 @@ def export_program(
                             f"(stages {sorted(wanted) if wanted else 'all'}); choose IR nodes "
                             "that were lowered to spikes")
     if dt_s is None:
-        dt_s = float(getattr(program.target, "time_step_s", None) or 1.0)
+        dt_s = float(program.target.time_step_s or 1.0) if program.target is not None else 1.0
     return _export(nets, host, dt_s, max_weights, name=program.graph.name)
 
 

@@ -36,7 +36,8 @@ leave them out on purpose
 
 from __future__ import annotations
 
-from compiler.hardware.profile import BOARD_FIELDS, BUILTIN_PROFILES, load_profile
+from compiler.hardware.loading import load_profile
+from compiler.hardware.profile import BOARD_FIELDS, BUILTIN_PROFILES
 from ir.errors import CompileError
 from ir.model import short_repr
 

@@ -66,7 +66,7 @@ def missing_features(params: NeuronParams, profile) -> list[str]:
     out: list[str] = []
     if isinstance(params, ResonatorParams) and not profile.resonate_and_fire:
         return ["resonate-and-fire neurons (resonate_and_fire: false)"]
-    offset = profile.current_decay_offset_lsb
+    offset = profile.number_format.current_decay_offset_lsb
     if round(params.du * DECAY_ONE) < offset:
         out.append(f"a non-leaking current (du = {params.du:g}; the current decays by at least "
                    f"{offset}/{DECAY_ONE} a step: current_decay_offset_lsb {offset})")

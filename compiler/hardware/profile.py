@@ -1,64 +1,44 @@
 """Hardware profiles: the budgets of a neuromorphic chip as data (built-in YAML or a user file).
 
-A :class:`HardwareProfile` lists what one core can hold and how many cores
-there are.  The passes ``quantize``, ``split`` and ``place`` read nothing else
-about the target, so a new chip is a new YAML file, never new code.  Budgets
-given as ``null`` are unbounded.
+A :class:`HardwareProfile` lists what one core can hold, how many cores there are, how
+the chip stores numbers (its :class:`~compiler.hardware.number_format.NumberFormat`,
+``profile.number_format``) and what its stock neurons do.  The compiler reads nothing
+else about the target, so a new chip is a new YAML file, never new code.  Budgets given
+as ``null`` are unbounded.  ``compile_graph`` loads the profile once and hands the same
+typed record to every pass; a compile without a target reads :data:`NO_TARGET`.
 
-A profile **file** gives every field of :data:`REQUIRED_FIELDS` (``null`` where a budget is
-unbounded), so a field left out is an error, never a budget silently removed — unless the
-file says ``unbounded: true``: then each field it leaves out is unbounded (``null``, or the
-neutral format of :class:`HardwareProfile`'s defaults).  Counts and widths are integers
-(not ``true``, not ``1.0``), switches are booleans, and rates and durations are numbers.
+Files are read by :func:`~compiler.hardware.loading.load_profile`
+(:mod:`compiler.hardware.loading`).
 
 Examples
 --------
->>> p = load_profile("loihi")
->>> p.neurons_per_core, p.n_cores, p.max_delay_steps
-(1024, 128, 63)
->>> load_profile("unbounded").neurons_per_core is None
-True
->>> _from_text("{name: mine, unbounded: true}", "file 'mine.yaml'").n_cores is None
-True
->>> _from_text("{name: mine}", "file 'mine.yaml'")
-Traceback (most recent call last):
-...
-ir.errors.CompileError: file 'mine.yaml': missing profile fields cores_per_chip, chips, \
-neurons_per_core, input_axons_per_core, output_axons_per_core, synapse_memory_bits_per_core, \
-bits_per_synapse, weight_bits, threshold_bits, weight_exponent_max, threshold_mantissa_bits, \
-threshold_shift, bias_mantissa_bits, bias_exponent_max, state_bits, graded_spike_bits, \
-per_neuron_scales, delay_bits, max_steps_per_frame, time_step_s, shared_weights_per_core, \
-current_decay_offset_lsb, full_voltage_decay, reset, fire_once, threshold_schedule, \
-input_gate, resonate_and_fire; give each (null = unbounded), or 'unbounded: true' to leave \
-budgets out on purpose
+>>> p = HardwareProfile(name="mine", neurons_per_core=256, weight_bits=8)
+>>> p.limits().tolist(), p.number_format.weight_bits, p.model_dump()["weight_bits"]
+([256.0, inf, inf, inf], 8, 8)
 """
 
 from __future__ import annotations
 
-from importlib import resources
-from pathlib import Path
+from collections.abc import Iterable, Mapping
 from typing import Annotated, Any, Literal
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
     Strict,
-    ValidationError,
     field_validator,
     model_serializer,
+    model_validator,
 )
 
 from compiler.hardware.figures import EnergyFigures
-from ir.errors import CompileError
-from ir.model import short_repr
-from ir.parsing import load_yaml
-from ir.serialize import describe_yaml_error
+from compiler.hardware.number_format import NUMBER_FORMAT_FIELDS, NumberFormat
+from ir.errors import BudgetError
 
-__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "OPTIONAL_FIELDS",
-           "REQUIRED_FIELDS", "HardwareProfile", "load_profile"]
+__all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "FILE_FIELDS",
+           "NO_TARGET", "OPTIONAL_FIELDS", "REQUIRED_FIELDS", "HardwareProfile"]
 
 #: The per-core budgets, in the column order of every demand array.
 BUDGETS: tuple[str, ...] = ("neurons", "input_axons", "output_axons", "synapse_bits")
@@ -77,6 +57,19 @@ BOARD_FIELDS: tuple[str, ...] = ("chip_profile", "inter_chip_bandwidth_bit_s",
 #: Optional fields a profile file may leave out (``None``), also left out of the serialised
 #: profile when unset: the board fields and the energy constants.
 OPTIONAL_FIELDS: tuple[str, ...] = (*BOARD_FIELDS, "energy")
+
+#: A profile's fields as a file lists them, flat: the number format's among the budgets.
+#: A profile serialises in this order (a saved program's target is unchanged by the
+#: :class:`~compiler.hardware.number_format.NumberFormat` record).
+FILE_FIELDS: tuple[str, ...] = (
+    "name", "cores_per_chip", "chips", "neurons_per_core", "input_axons_per_core",
+    "output_axons_per_core", "synapse_memory_bits_per_core", "bits_per_synapse",
+    "weight_bits", "threshold_bits", "weight_exponent_max", "threshold_mantissa_bits",
+    "threshold_shift", "bias_mantissa_bits", "bias_exponent_max", "state_bits",
+    "graded_spike_bits", "per_neuron_scales", "delay_bits", "max_steps_per_frame",
+    "time_step_s", "shared_weights_per_core", "current_decay_offset_lsb", "full_voltage_decay",
+    "reset", "fire_once", "threshold_schedule", "input_gate", "resonate_and_fire",
+    *OPTIONAL_FIELDS[:-1], "energy", "description")
 
 _Int = Annotated[int, Strict()]  # not True, not 1.0: a count is an integer
 _Count = _Int | None
@@ -101,27 +94,10 @@ class HardwareProfile(BaseModel):
         Synaptic memory of one core, bits.
     bits_per_synapse : int
         Bits of one stored synapse entry (weight + delay + index).
-    weight_bits, threshold_bits : int or None
-        Signed integer width of a weight mantissa and of thresholds/biases/membranes
-        in state units (``None``: floating point, no quantization).
-    weight_exponent_max : int
-        Weights are ``mantissa·2^e`` with one exponent ``e ∈ [0, weight_exponent_max]``
-        per projection (a synapse format); 0: plain integers.
-    threshold_mantissa_bits, threshold_shift : int or None, int
-        Thresholds are an unsigned mantissa of that width times ``2^threshold_shift``
-        (``None``: any integer up to the ``threshold_bits`` limit).
-    bias_mantissa_bits, bias_exponent_max : int or None, int
-        Biases are a signed mantissa of that width times ``2^e``, ``0 ≤ e ≤ max``.
-    state_bits : int or None
-        Signed width of the neuron state ``u``, ``v`` in state units (not wrapped or
-        saturated by the simulator: a run counts the states beyond it).
-    graded_spike_bits : int or None
-        Payload width of graded spikes (``None``: binary spikes only).
-    per_neuron_scales : bool
-        Whether each neuron may have its own bias and threshold (or initial membrane),
-        which the per-neuron gains of the time-coded motifs need.
-    delay_bits : int or None
-        Width of a synaptic delay; the largest delay is ``2**delay_bits - 1`` steps.
+    number_format : NumberFormat
+        How the chip stores weights, thresholds, biases, state, graded payloads and
+        delays (:class:`~compiler.hardware.number_format.NumberFormat`); a file gives its
+        fields flat (``weight_bits: 8``), as :data:`FILE_FIELDS` lists them.
     max_steps_per_frame : int or None
         Time steps one frame may use.
     time_step_s : float or None
@@ -129,9 +105,6 @@ class HardwareProfile(BaseModel):
     shared_weights_per_core : bool
         Whether a core stores a shared matrix or stencil kernel once for all the
         neurons it holds, instead of once per neuron/repetition.
-    current_decay_offset_lsb : int
-        The current decay the chip adds to every ``du``, in ``1/4096`` per step (Loihi 1:
-        1, so ``du = 0``, a non-leaking current, does not exist).
     full_voltage_decay : bool
         Whether ``dv = 1`` (a membrane that forgets every step) exists (Loihi 1: the 12-bit
         ``dv`` register stops at 4095).
@@ -171,21 +144,10 @@ class HardwareProfile(BaseModel):
     output_axons_per_core: _Count = Field(default=None, ge=1)
     synapse_memory_bits_per_core: _Count = Field(default=None, ge=1)
     bits_per_synapse: _Int = Field(default=64, ge=1)
-    weight_bits: _Count = Field(default=None, ge=2, le=64)
-    threshold_bits: _Count = Field(default=None, ge=2, le=64)
-    weight_exponent_max: _Int = Field(default=0, ge=0, le=32)
-    threshold_mantissa_bits: _Count = Field(default=None, ge=1, le=64)
-    threshold_shift: _Int = Field(default=0, ge=0, le=32)
-    bias_mantissa_bits: _Count = Field(default=None, ge=2, le=64)
-    bias_exponent_max: _Int = Field(default=0, ge=0, le=32)
-    state_bits: _Count = Field(default=None, ge=2, le=64)
-    graded_spike_bits: _Count = Field(default=None, ge=2, le=64)
-    per_neuron_scales: _Bool = False
-    delay_bits: _Count = Field(default=None, ge=0, le=32)
+    number_format: NumberFormat = NumberFormat()
     max_steps_per_frame: _Count = Field(default=None, ge=1)
     time_step_s: float | None = Field(default=None, gt=0)
     shared_weights_per_core: _Bool = False
-    current_decay_offset_lsb: _Int = Field(default=0, ge=0, le=4096)
     full_voltage_decay: _Bool = True
     reset: Literal["zero", "subtract", "programmable"] = "programmable"
     fire_once: Literal["none", "programmable"] = "programmable"
@@ -208,13 +170,48 @@ class HardwareProfile(BaseModel):
             raise ValueError("a number, not a boolean")
         return value
 
+    @model_validator(mode="before")
+    @classmethod
+    def _nest_number_format(cls, data: Any) -> Any:
+        # a file lists the number format flat among the budgets: build the sub-record
+        if not isinstance(data, dict):
+            return data
+        flat = {k: data[k] for k in NUMBER_FORMAT_FIELDS if k in data}
+        if not flat:
+            return data
+        if "number_format" in data:
+            raise ValueError(f"give the number format flat ({', '.join(flat)}) or as "
+                             "'number_format', not both")
+        return {**{k: v for k, v in data.items() if k not in flat}, "number_format": flat}
+
     @model_serializer(mode="wrap")
-    def _without_unset_optional_fields(self, handler):
+    def _flat_without_unset_optional_fields(self, handler):
         data = handler(self)
+        if not isinstance(data, dict):
+            return data
+        if isinstance(data.get("number_format"), dict):  # absent: excluded from a partial dump
+            flat = {**data.pop("number_format"), **data}
+            # a field FILE_FIELDS lacks is still saved, last (tests/test_target_typed.py: none)
+            order = [*FILE_FIELDS, *(k for k in flat if k not in FILE_FIELDS)]
+            data = {k: flat[k] for k in order if k in flat}
         for key in OPTIONAL_FIELDS:
             if data.get(key) is None:
                 data.pop(key, None)
         return data
+
+    def model_copy(self, *, update: Mapping[str, Any] | None = None,
+                   deep: bool = False) -> HardwareProfile:
+        """A copy with ``update`` applied and validated (flat number-format fields allowed).
+
+        Examples
+        --------
+        >>> from compiler.hardware import load_profile
+        >>> load_profile("loihi").model_copy(update={"state_bits": 20}).number_format.state_bits
+        20
+        """
+        if not update:
+            return super().model_copy(deep=deep)
+        return type(self).model_validate({**self.model_dump(), **update})
 
     @property
     def n_cores(self) -> int | None:
@@ -223,32 +220,55 @@ class HardwareProfile(BaseModel):
             return None
         return self.cores_per_chip * self.chips
 
-    @property
-    def max_delay_steps(self) -> int | None:
-        """Largest synaptic delay, ``2**delay_bits - 1`` steps (``None``: unbounded)."""
-        return None if self.delay_bits is None else (1 << self.delay_bits) - 1
+    def check_steps_per_frame(self, stages: Iterable[Mapping[str, Any]]) -> None:
+        """Refuse a stage whose ``steps_per_frame`` exceeds :attr:`max_steps_per_frame`.
 
-    @property
-    def threshold_max(self) -> int | None:
-        """Largest threshold in state units (``None``: unbounded).
+        Parameters
+        ----------
+        stages : iterable of dict
+            The report's stage rows (:func:`compiler.report.stages.stage_rows`).
+
+        Raises
+        ------
+        BudgetError
+            Naming the stage, its network, its steps per frame and the limit.
 
         Examples
         --------
-        >>> load_profile("loihi").threshold_max  # 17-bit vth in 64-LSB state units
-        131071
+        >>> from compiler.hardware import load_profile
+        >>> row = {"node": "f", "network": "n", "steps_per_frame": 357, "time_steps": 357,
+        ...        "repetitions": 1, "multiplexed": False}
+        >>> load_profile("loihi").check_steps_per_frame([row])  # no limit
+        >>> tiny = load_profile("loihi").model_copy(update={"max_steps_per_frame": 100})
+        >>> tiny.check_steps_per_frame([row])
+        Traceback (most recent call last):
+        ...
+        ir.errors.BudgetError: stage 'f' of network 'n' runs 357 steps per frame (357 time \
+steps), over max_steps_per_frame = 100 of loihi; use fewer time steps (option time_steps) \
+or a target that runs more steps per frame
         """
-        limits = []
-        if self.threshold_bits is not None:
-            limits.append((1 << (self.threshold_bits - 1)) - 1)
-        if self.threshold_mantissa_bits is not None:
-            limits.append(((1 << self.threshold_mantissa_bits) - 1) << self.threshold_shift)
-        return min(limits) if limits else None
+        limit = self.max_steps_per_frame
+        if limit is None:
+            return
+        for row in stages:
+            steps = row["steps_per_frame"]
+            if steps <= limit:
+                continue
+            how = (f"{row['time_steps']} time steps x {row['repetitions']} time-multiplexed "
+                   "repetitions" if row["multiplexed"] else f"{row['time_steps']} time steps")
+            fix = ("; use fewer time steps (option time_steps)"
+                   + (", repetitions='spatial'" if row["multiplexed"] else "")
+                   + " or a target that runs more steps per frame")
+            raise BudgetError(f"stage {row['node']!r} of network {row['network']!r} runs "
+                              f"{steps} steps per frame ({how}), over max_steps_per_frame = "
+                              f"{limit} of {self.name}{fix}", node=row["node"])
 
     def limits(self) -> np.ndarray:
         """Per-core limits in :data:`BUDGETS` order as floats (``inf`` = unbounded).
 
         Examples
         --------
+        >>> from compiler.hardware import load_profile
         >>> load_profile("loihi").limits().tolist()
         [1024.0, 4096.0, 4096.0, 1048576.0]
         """
@@ -260,107 +280,10 @@ class HardwareProfile(BaseModel):
 #: Fields a chip profile file must give (``null`` where unbounded) unless it says
 #: ``unbounded: true``: every field but the name, the description and the optional fields.
 REQUIRED_FIELDS: tuple[str, ...] = tuple(
-    k for k in HardwareProfile.model_fields if k not in ("name", "description",
-                                                         *OPTIONAL_FIELDS))
+    k for k in FILE_FIELDS if k not in ("name", "description", *OPTIONAL_FIELDS))
 
-
-def load_profile(target: str | Path | HardwareProfile | None) -> HardwareProfile:
-    """A built-in profile by name, a profile from a YAML file, or ``unbounded`` for ``None``.
-
-    Parameters
-    ----------
-    target : str, Path, HardwareProfile or None
-        A name in :data:`BUILTIN_PROFILES`, or a path to a YAML file (a ``str``
-        ending in ``.yaml``/``.yml`` counts as a path).
-
-    Returns
-    -------
-    HardwareProfile
-
-    Raises
-    ------
-    CompileError
-        Unknown name, unreadable file, or a field out of range (naming the file and field).
-
-    Examples
-    --------
-    >>> load_profile("spinnaker2").cores_per_chip
-    152
-    >>> b = load_profile("kapoho_point")
-    >>> b.chip_profile, b.chips, b.n_cores, b.neurons_per_core
-    ('loihi2', 8, 1024, 8192)
-    >>> load_profile("tpu")
-    Traceback (most recent call last):
-    ...
-    ir.errors.CompileError: unknown hardware profile 'tpu'; built-in profiles are loihi, \
-loihi2, spinnaker2, unbounded, boards kapoho_point, nahuku32, spinnaker2_48, hala_point, or \
-give a path to a YAML profile file
-    """
-    if isinstance(target, HardwareProfile):
-        return target
-    if target is None:
-        target = "unbounded"
-    if isinstance(target, str) and target in BUILTIN_PROFILES:
-        text = resources.files("compiler.hardware").joinpath(f"profiles/{target}.yaml")
-        return _from_text(text.read_text(encoding="utf-8"), f"built-in profile {target!r}")
-    if isinstance(target, str) and target in BUILTIN_BOARDS:
-        text = resources.files("compiler.hardware").joinpath(f"boards/{target}.yaml")
-        return _from_text(text.read_text(encoding="utf-8"), f"built-in board {target!r}")
-    if not isinstance(target, str | Path):
-        raise CompileError(f"hardware target must be a profile name, a YAML path or a "
-                           f"HardwareProfile; got {type(target).__name__} {target!r}")
-    path = Path(target)
-    if not (isinstance(target, Path) or path.suffix in (".yaml", ".yml")):
-        raise CompileError(f"unknown hardware profile {target!r}; built-in profiles are "
-                           f"{', '.join(BUILTIN_PROFILES)}, boards {', '.join(BUILTIN_BOARDS)}, "
-                           "or give a path to a YAML profile file")
-    try:
-        if not path.is_file() or path.stat().st_size > 1 << 20:  # not /dev/zero, not a giant
-            raise CompileError(f"hardware profile file {str(path)!r} cannot be read: not a "
-                               "regular file of at most 1 MiB")
-        text = path.read_text(encoding="utf-8")
-    except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
-        raise CompileError(f"hardware profile file {str(path)!r} cannot be read: {err}") from err
-    return _from_text(text, f"hardware profile file {str(path)!r}")
-
-
-def _check_flag(data: dict, label: str) -> bool:
-    """Pop the file's ``unbounded`` flag (a boolean; absent: false)."""
-    flag = data.pop("unbounded", False)
-    if not isinstance(flag, bool):
-        raise CompileError(f"{label}: field 'unbounded' = {short_repr(flag)}: give true (leave "
-                           "budgets out on purpose: each one left out is unbounded) or false")
-    return flag
-
-
-def _from_text(text: str, label: str) -> HardwareProfile:
-
-    try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
-        data: Any = load_yaml(text, error=CompileError)
-    except yaml.YAMLError as err:
-        raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
-    except CompileError as err:
-        raise CompileError(f"{label}: {err}") from err
-    if not isinstance(data, dict):
-        raise CompileError(f"{label}: expected a mapping of profile fields, got "
-                           f"{type(data).__name__}")
-    board = data.get("chip_profile") is not None
-    if board:  # a board: its chip's budgets, never loosened
-        from compiler.hardware.boards import board_fields  # boards imports this module
-
-        data = board_fields(data, label)
-    else:
-        data = dict(data)
-        unbounded = _check_flag(data, label)
-    try:  # model_validate: a non-string key is a field error, not a TypeError of **data
-        profile = HardwareProfile.model_validate(data)
-    except ValidationError as err:
-        parts = [f"field '{'.'.join(map(str, e['loc']))}' = {short_repr(e.get('input'))}: "
-                 f"{e['msg']}" for e in err.errors(include_url=False)]
-        raise CompileError(f"{label}: " + "; ".join(parts)) from err
-    missing = [] if board or unbounded else [k for k in REQUIRED_FIELDS if k not in data]
-    if missing:  # after the fields' own checks: a misspelt field is named as such first
-        raise CompileError(f"{label}: missing profile fields {', '.join(missing)}; give each "
-                           "(null = unbounded), or 'unbounded: true' to leave budgets out on "
-                           "purpose")
-    return profile
+#: The target of a compile without one (``compile_graph(..., target=None)``): no budgets,
+#: exact (floating-point) numbers, per-neuron scales and every neuron feature.  The lowering
+#: reads it as it reads a chip; the allocation passes do not run.
+NO_TARGET = HardwareProfile(name="ideal", per_neuron_scales=True,
+                            description="no target: no budgets, exact numbers, every feature")

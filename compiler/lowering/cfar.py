@@ -153,11 +153,11 @@ def lower_cfar(ctx: LoweringContext, node: str, op: CFAR, inputs: list[Value]) -
             lo, hi, alpha=alpha, n_steps=n_steps, ties=ctx.settings_of(CfarOptions).cfar_ties)
         # each input cell spikes once and only the CUT's weight is positive: after its spike
         # the membrane only falls, so a reset to 0 is fire-once (stock neurons: no fire-once)
-        stock = getattr(ctx.target, "fire_once", "programmable") == "none"
+        stock = ctx.target.fire_once == "none"
         params = NeuronParams(du=1.0, dv=0.0, v_th=1.0, reset="value" if stock else "fire_once")
         # integer targets: the membrane k_eff − B is a whole number, so k_eff itself decides
         # exactly (B <= k_eff − 1) and the quantize pass can store it without rounding
-        integer = getattr(ctx.target, "weight_bits", None) is not None
+        integer = ctx.target.number_format.integer
         cut_w = effective_k(op.k, n_avail, win.n_train) + (0.0 if integer else 0.5)
         train_w = -1.0
     else:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from compiler.hardware import HardwareProfile
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.registry import LoweringRegistry
 from compiler.lowering.values import SpikeValue, Value
@@ -74,18 +75,18 @@ def neuron_params(dynamics: LayerDynamics) -> NeuronParams:
         fields["phases"] = (Phase(start_step=0, spiking_on=False),)
     return NeuronParams(**fields)
 
-def _no_memory(params: NeuronParams, w_min: float, target) -> NeuronParams:
+def _no_memory(params: NeuronParams, w_min: float, target: HardwareProfile) -> NeuronParams:
     """``dv = 0`` for a memoryless (``dv = 1``) IF neuron on a target without ``dv = 1``,
     where it changes nothing: every weight is at least the threshold and the reset is to 0,
     so after each step the membrane is 0 (no input, or a spike and its reset).
 
     Examples
     --------
-    >>> from compiler.hardware import load_profile
-    >>> _no_memory(RELAY, 1.0, load_profile("loihi")).dv, _no_memory(RELAY, 0.5, None).dv
+    >>> from compiler.hardware import NO_TARGET, load_profile
+    >>> _no_memory(RELAY, 1.0, load_profile("loihi")).dv, _no_memory(RELAY, 0.5, NO_TARGET).dv
     (0.0, 1.0)
     """
-    stock = getattr(target, "full_voltage_decay", True)
+    stock = target.full_voltage_decay
     if (stock or params.dv != 1.0 or params.du != 1.0 or params.reset != "value"
             or params.v_reset != 0.0 or w_min < params.v_th or len(params.phases) > 1
             or params.phases[0].bias != 0.0):

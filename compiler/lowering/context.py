@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
+from compiler.hardware import NO_TARGET, HardwareProfile
 from compiler.hardware.neuron_features import check_population
 from compiler.lowering.builder import NetworkBuilder
 from compiler.lowering.registry import HOST, LoweringRegistry
@@ -69,8 +70,10 @@ class LoweringContext:
         model not given takes its defaults.
     calibration : dict
         Per-node calibration data from the calibrate pass (node id → record).
-    target : object, optional
-        The hardware profile.
+    target : HardwareProfile
+        The hardware profile, as the compile loaded it (:data:`~compiler.hardware.NO_TARGET`
+        for a compile without one): rules read its budgets and number format
+        (``ctx.target.number_format``) and nothing else about the chip.
     moving : frozenset of str
         Nodes that compute the moving part of a static split
         (:mod:`compiler.passes.static_split`): the part of the signal that repeats over
@@ -85,7 +88,7 @@ class LoweringContext:
     motifs: Mapping[str, str] = field(default_factory=dict)
     settings: Mapping[type[BaseModel], BaseModel] = field(default_factory=dict)
     calibration: dict[str, Any] = field(default_factory=dict)
-    target: Any = None
+    target: HardwareProfile = NO_TARGET
     moving: frozenset[str] = frozenset()
     host_pinned: frozenset[str] = frozenset()
     types: dict[str, TensorType] = field(init=False)
@@ -231,8 +234,6 @@ def lower_graph(ctx: LoweringContext) -> list[Segment]:
 def _check_features(ctx: LoweringContext, node: str) -> None:
     """Refuse ``node``'s populations where the target's stock neurons lack what they need
     (:mod:`compiler.hardware.neuron_features`)."""
-    if ctx.target is None:
-        return
     user = node.split("__")[0]  # the user's node (static-split parts share its id)
     fix = f"use a target whose neurons have it (loihi2) or motifs={{{user!r}: 'host'}}"
     for opened in ctx._opens():

@@ -138,7 +138,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
     t = time_steps(ctx)
     bits = weight_bits or layer_weight_bits(ctx, node)
     stacked = np.concatenate([i.matrix.ravel() for i in inputs])
-    whole = integer_target(ctx) and (getattr(ctx.target, "bias_mantissa_bits", None) or True)
+    whole = integer_target(ctx) and (ctx.target.number_format.bias_mantissa_bits or True)
     top = float(max(gains)) if neuron_gains else 1.0
     if graded_readout(ctx, node, host_only=_allow_companding(ctx, node),
                       neuron_gains=neuron_gains and top > 1):
@@ -212,14 +212,13 @@ def layer_weight_bits(ctx: LoweringContext, node: str) -> int:
 def _excess(ctx: LoweringContext, sched, top: float) -> float:
     """How far the schedule's threshold and largest bias (times the largest per-neuron
     scale ``top``) exceed the target's ranges (≤ 1: they fit)."""
-    target = ctx.target
+    fmt = ctx.target.number_format
     out = 1.0
-    limit = getattr(target, "threshold_max", None)
+    limit = fmt.threshold_max
     if limit:
         out = max(out, sched.v_th * top / limit)
-    b_bits = getattr(target, "bias_mantissa_bits", None)
-    if b_bits:
-        b_max = ((1 << (b_bits - 1)) - 1) << target.bias_exponent_max
+    b_max = fmt.bias_max
+    if b_max:
         out = max(out, max(sched.biases) * top / b_max)
     return out
 

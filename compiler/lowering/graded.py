@@ -35,9 +35,8 @@ def graded_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: lis
     calibrated ``|V|`` times the guard (:func:`~compiler.lowering.time_inputs.guard_of`,
     halved down to 8× first) fits the payload and the membrane state.
     """
-    target = ctx.target
-    width = min(b for b in (getattr(target, "graded_spike_bits", None),
-                            getattr(target, "state_bits", None), 64) if b)
+    fmt = ctx.target.number_format
+    width = min(b for b in (fmt.graded_spike_bits, fmt.state_bits, 64) if b)
     limit = float(2 ** (width - 1) - 1)
     wanted = guard_of(ctx, node, 256)[1]  # the ratio: a read-out layer's, else none
     stacked = np.concatenate([i.matrix.ravel() for i in inputs])

@@ -29,7 +29,7 @@ __all__ = ["Coarsened", "coarsen", "connect_levels", "integer_target", "layer_le
 def integer_target(ctx: LoweringContext) -> bool:
     """Whether the program is quantized for a target with integer weights afterwards (then
     biases are whole and rounding keeps each column's response to a constant input)."""
-    return getattr(ctx.target, "weight_bits", None) is not None
+    return ctx.target.number_format.integer
 
 
 def membrane_unit(node: str, q: float, code_in: TimeCode) -> float:

@@ -26,7 +26,8 @@ whose thresholds grow geometrically (:func:`~compiler.lowering.charging.log_sche
 new scene's target in a bin that held noise in the calibration frames is neither clipped
 nor is the noise floor decoded to 0.  ``'auto'`` (default) is ``graded`` on targets with
 graded spikes where the value goes to the host, ``log`` where it goes to the host
-without them, else ``time``; ``docs/fourier.md`` compares the codes.
+without them, else ``time``; ``docs/fourier.md`` compares the codes
+(:mod:`compiler.lowering.resonator_readout` chooses the code and its scales).
 
 **Fixed point** (targets with ``weight_bits``): the rotation coefficients have
 :data:`~compiler.lowering.resonator_fixed.CHIP_COEF_BITS` = 12 fraction bits — the
@@ -67,8 +68,6 @@ from math import prod
 
 import numpy as np
 
-from compiler.hardware.formats import bias_value
-from compiler.lowering.charging import GUARD_RATIO, ChargingSchedule, log_schedule
 from compiler.lowering.context import LoweringContext
 from compiler.lowering.dft_common import dft_axes
 from compiler.lowering.options import ResonatorOptions
@@ -85,20 +84,25 @@ from compiler.lowering.resonator_fixed import (
     float_coefficients,
     renormalised_coefficients,
 )
+from compiler.lowering.resonator_readout import (
+    MOTIF,
+    choose_readout,
+    log_readout,
+    readout_scales,
+)
 from compiler.lowering.time_code import TimeCode, calibration_of, headroom_of, time_steps
 from compiler.lowering.time_inputs import TimeInputOptions, encoder_headroom
 from compiler.lowering.values import Value
 from compiler.snn import N_PARTS, PART_AXIS, Decoder, Encoder, Phase
 from compiler.snn.resonator import ResonatorParams
 from compiler.snn.stream import BIT_AXIS, StreamCode
-from ir.errors import BudgetError, CompileError
+from ir.errors import CompileError
 from ir.ops import DFT, Op
 from radar.dsp import dft_matrix
 from radar.windows import window_coefficients
 
 __all__ = ["MOTIF", "lower_resonator", "register_resonator"]
 
-MOTIF = "resonator"
 #: Bits of the stream code per input part when ``stream_bits`` is not given.
 DEFAULT_STREAM_BITS = 12
 #: The drift bound above which a layer is reported (refused above ``resonator_drift_max``).
@@ -115,28 +119,29 @@ def _bits(ctx: LoweringContext, node: str, ratio: float) -> tuple[int, int]:
     state ``ratio·2^(B+s)`` within ``2^(state_bits−2)``; the bits in groups of ``w − 1``,
     one projection each, so every weight ``2^(b+s)`` is one mantissa ``≤ 2^(w−2)`` under
     its projection's exponent: no split synapses)."""
-    w_bits = getattr(ctx.target, "weight_bits", None)
+    fmt = ctx.target.number_format
+    w_bits = fmt.weight_bits
     given = ctx.settings_of(ResonatorOptions).stream_bits
     if not w_bits:
         bits = int(given or DEFAULT_STREAM_BITS)
         if not 1 <= bits <= 30:
             raise CompileError(f"node {node!r}: stream_bits={bits} is outside 1..30", node=node)
         return bits, 0
-    e_max = int(getattr(ctx.target, "weight_exponent_max", 0) or 0)
+    e_max = fmt.weight_exponent_max
     room = int(np.floor(np.log2(_state_top(ctx) / max(ratio, 1e-30))))
     top = min(w_bits - 1 + e_max, room)
     bits = int(given or min(max(DEFAULT_STREAM_BITS, room), top))  # fill the state
     if not 1 <= bits <= top:
         raise CompileError(f"node {node!r}: stream_bits={bits} is outside 1..{top} (weights "
                            f"2^b of {w_bits}-bit mantissas and exponents <= {e_max} reach "
-                           f"2^{w_bits - 2 + e_max}; the {ctx.target.state_bits}-bit state "
+                           f"2^{w_bits - 2 + e_max}; the {fmt.state_width}-bit state "
                            f"holds {room} bits at this gain)", node=node)
     groups = -(-bits // (w_bits - 1))
     return bits, int(np.clip(room - bits, 0, e_max - (groups - 1) * (w_bits - 1)))
 
 
 def _state_top(ctx: LoweringContext) -> float:
-    return 2.0 ** ((getattr(ctx.target, "state_bits", None) or 24) - 2)
+    return 2.0 ** (ctx.target.number_format.state_width - 2)
 
 
 def _frequencies(node: str, op: DFT, n: int) -> tuple[np.ndarray, int]:
@@ -193,7 +198,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     rho = ctx.settings_of(ResonatorOptions).resonator_decay
     if not 0.0 < rho <= 1.0:
         raise CompileError(f"node {node!r}: resonator_decay={rho} is outside (0, 1]", node=node)
-    integer = bool(getattr(ctx.target, "weight_bits", None))
+    integer = ctx.target.number_format.integer
     renorm = None
     if integer:
         check_decay(node, rho, ctx.settings_of(ResonatorOptions).resonator_coef_bits)
@@ -205,7 +210,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     else:
         unit, f_bits, w_level = 1.0, 0, code.step_of_level
         c, s = float_coefficients(theta, rho)
-    b, scales = _readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
+    b, scales = readout_scales(ctx, node, rec, axes.out_axis, full / unit, t_out, integer)
     drift = drift_report(c, s, theta, n_steps=m, rho=rho, bits=f_bits, full_state=full / unit,
                          renorm=renorm)
     given = ctx.settings_of(ResonatorOptions).resonator_drift_max
@@ -228,9 +233,9 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
                f"{full / unit:.0f}); raise resonator_drift_max or calibrate on data")
         raise CompileError(f"node {node!r}: resonator drift bound {drift['bound']:.4f} over "
                            f"N={m} steps exceeds resonator_drift_max={limit} {why}", node=node)
-    readout = _readout(ctx, node)
+    readout = choose_readout(ctx, node)
     graded = readout == "graded"
-    log = _log_readout(ctx, full / unit, t_out, integer) if readout == "log" else None
+    log = log_readout(ctx, full / unit, t_out, integer) if readout == "log" else None
     if log is not None:  # one shared logarithmic scale: no per-bin maxima to clip at
         scales = None
         v_th = log.v_th
@@ -251,7 +256,7 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     out_type = ctx.types[node]
     pop = builder.population(node, "out", axes.out_shape(out_type, "re_im_signed"), params,
                              motif=MOTIF)
-    w_bits = getattr(ctx.target, "weight_bits", None)
+    w_bits = ctx.target.number_format.weight_bits
     _connect(builder, node, src.id, pop.id, bits, split_in, axes.out_axis, len(freqs), w_level,
              group=(w_bits - 1) if w_bits else bits)
     builder.meta.setdefault("resonator", {})[node] = {
@@ -284,51 +289,6 @@ def lower_resonator(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]
     return ctx.spike_value(node, pop, dec, (m, m + t_out), **tc.as_code())
 
 
-def _host_read(ctx: LoweringContext, node: str) -> bool:
-    """Whether every consumer takes the value on the host (a resonator re-streams it)."""
-    return all(ctx.motif_for(c) in ("host", MOTIF) for c in ctx.graph.consumers_of(node))
-
-
-def _readout(ctx: LoweringContext, node: str) -> str:
-    """Option ``resonator_readout``: ``auto`` is ``graded`` where the target has graded spikes
-    and the value goes to the host, ``log`` where it goes to the host without them, else
-    ``time`` (a spiking consumer reads the linear code)."""
-    readout = ctx.settings_of(ResonatorOptions).resonator_readout
-    if readout not in ("auto", "time", "log", "graded"):
-        raise CompileError(f"node {node!r}: resonator_readout={readout!r} is not 'auto', "
-                           "'time', 'log' or 'graded'", node=node)
-    host = _host_read(ctx, node)
-    if readout in ("graded", "log") and not host:
-        raise CompileError(f"node {node!r}: resonator_readout={readout!r} is read by the "
-                           "host only; a spiking consumer needs 'time'", node=node)
-    payload = _payload_fits(ctx)
-    if readout == "graded" and payload is not True:
-        name = getattr(ctx.target, "name", "this target")
-        raise BudgetError(f"node {node!r}: resonator_readout='graded' needs graded spikes "
-                          f"that carry the held state; {name!r} {payload}; use "
-                          "resonator_readout='log'", node=node)
-    if readout == "auto" and host:
-        return "graded" if payload is True else "log"
-    return "time" if readout == "auto" else readout
-
-
-def _payload_fits(ctx: LoweringContext) -> bool | str:
-    """True where a graded spike carries a held state (whose calibrated full scale is about
-    ``2^(state_bits − 2)``, :func:`_bits`), else why not (binary spikes, or a payload
-    narrower than ``state_bits − 1`` bits)."""
-    t = ctx.target
-    width = getattr(t, "graded_spike_bits", None)
-    if t is None:
-        return "is no chip"
-    if not width:
-        return "has binary spikes only (graded_spike_bits: null)"
-    state = getattr(t, "state_bits", None) or 24
-    if width < state - 1:
-        return (f"sends {width}-bit payloads, narrower than the {state - 1} bits of its "
-                f"{state}-bit state at the calibrated full scale")
-    return True
-
-
 def _coefficients(ctx: LoweringContext, node: str, theta: np.ndarray, rho: float,
                   n: int) -> tuple[Renorm, int]:
     """Fixed-point coefficients and their renormalisation (``block`` 0: none).
@@ -350,55 +310,6 @@ def _coefficients(ctx: LoweringContext, node: str, theta: np.ndarray, rho: float
         raise CompileError(f"node {node!r}: resonator_renorm={mode} is longer than the {n} "
                            f"input steps; give 2..{n}, 'auto' or 'off'", node=node)
     return renormalised_coefficients(theta, rho, f_bits, n_steps=n, block=int(mode)), f_bits
-
-
-def _readout_scales(ctx: LoweringContext, node: str, rec, axis: str, full_state: float,
-                    t_out: int, integer: bool) -> tuple[float, np.ndarray | None]:
-    """Base bias ``b`` and per-bin scales ``c_k`` of the time read-out (None: one scale).
-
-    Where every consumer is on the host, bin ``k`` charges with ``c_k·b`` so that its own
-    calibrated maximum spans the window (the DC bin of real captures is far above the
-    rest); spiking consumers read one shared scale.
-    """
-    per_index = rec.axis_max.get(axis)
-    host_only = _host_read(ctx, node)
-    if not (host_only and per_index) or (integer and not ctx.target.per_neuron_scales):
-        return (_whole_bias(ctx, full_state / t_out) if integer else full_state / t_out), None
-    part_max = np.asarray(per_index, np.float64) * headroom_of(ctx)
-    level = np.maximum(part_max / max(rec.max_part * headroom_of(ctx), 1e-300), 1e-6)
-    if integer:  # base bias 2, whole scales: bin k charges by 2·c_k
-        c = np.maximum(1.0, np.ceil(level * full_state / (2.0 * t_out)))
-        return 2.0, c
-    return full_state / t_out, level
-
-
-def _log_readout(ctx: LoweringContext, full_state: float, t_out: int,
-                 integer: bool) -> ChargingSchedule:
-    r"""The logarithmic time read-out of a host-read resonator (:func:`log_schedule`).
-
-    A constant bias resolves ``full/T``: a bin 48 dB under the calibrated peak (at
-    ``T = 256``) decodes to 0, and per-bin scales fitted to the calibration frames clip a
-    new scene's target in a bin that held noise there. Here every bin shares one scale
-    whose top is :data:`~compiler.lowering.charging.GUARD_RATIO` (24 dB) over the
-    calibrated full scale — as far as the state holds — and whose levels are geometric
-    down to :data:`~compiler.lowering.charging.LOG_DYNAMIC_RANGE` below it.
-    """
-    t = ctx.target
-    top = full_state * GUARD_RATIO
-    state_bits = getattr(t, "state_bits", None) if integer else None
-    if state_bits:
-        top = min(top, float(2 ** (state_bits - 1) - 1) / (1 + 2 ** (1 - t_out)))
-    whole = (getattr(t, "bias_mantissa_bits", None) or True) if integer else False
-    return log_schedule(t_out, top, whole=whole)
-
-
-def _whole_bias(ctx: LoweringContext, b: float) -> float:
-    """An even whole bias the target can hold, at most ``b`` (at least 2)."""
-    t = ctx.target
-    b = max(2.0, 2.0 * np.floor(b / 2))
-    q = bias_value(b, mantissa_bits=getattr(t, "bias_mantissa_bits", None),
-                   exponent_max=getattr(t, "bias_exponent_max", 0) or 0)
-    return float(max(2.0, 2.0 * np.floor(q / 2)))
 
 
 def _connect(builder, node: str, src: str, dst: str, bits: int, split_in: str, out_axis: str,

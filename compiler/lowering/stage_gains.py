@@ -108,11 +108,12 @@ def integer_weight_bits(ctx: LoweringContext) -> int | None:
     Examples
     --------
     >>> from types import SimpleNamespace
+    >>> from compiler.hardware import load_profile
     >>> integer_weight_bits(SimpleNamespace(settings_of=lambda model: model(),
-    ...                                     target=SimpleNamespace(weight_bits=8)))
+    ...                                     target=load_profile("loihi")))
     8
     """
-    return ctx.settings_of(TimeDftOptions).weight_bits or getattr(ctx.target, "weight_bits", None)
+    return ctx.settings_of(TimeDftOptions).weight_bits or ctx.target.number_format.weight_bits
 
 
 def gain_mechanism(ctx: LoweringContext) -> str | None:
@@ -132,8 +133,9 @@ def gain_mechanism(ctx: LoweringContext) -> str | None:
     Examples
     --------
     >>> from types import SimpleNamespace
+    >>> from compiler.hardware import load_profile
     >>> ctx = SimpleNamespace(settings_of=lambda model: model(stage_gains="auto"),
-    ...                       target=SimpleNamespace(weight_bits=8))
+    ...                       target=load_profile("loihi"))
     >>> gain_mechanism(ctx)
     'neurons'
     """
@@ -144,7 +146,7 @@ def gain_mechanism(ctx: LoweringContext) -> str | None:
         return mode
     if not integer_weight_bits(ctx):
         return "weights"
-    return "neurons" if getattr(ctx.target, "per_neuron_scales", True) else "weights"
+    return "neurons" if ctx.target.number_format.per_neuron_scales else "weights"
 
 
 def _gain_path(ctx: LoweringContext, node: str, axis: str,

@@ -166,14 +166,14 @@ def graded_readout(ctx: LoweringContext, node: str, *, host_only: bool,
     the charging stage); ``graded`` on a target without graded spikes is an error.
     """
     mode = ctx.settings_of(TimeInputOptions).output_spikes
-    bits = getattr(ctx.target, "graded_spike_bits", None)
+    bits = ctx.target.number_format.graded_spike_bits
     if mode == "time":
         return False
     possible = host_only and not neuron_gains
     if mode == "graded":
         if not bits:
             raise BudgetError(f"node {node!r}: output_spikes='graded' needs a target with graded "
-                              f"spikes; {getattr(ctx.target, 'name', 'this target')!r} has binary "
+                              f"spikes; {ctx.target.name!r} has binary "
                               "spikes only (graded_spike_bits: null); use output_spikes='time'",
                               node=node)
         if not possible:

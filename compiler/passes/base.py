@@ -35,7 +35,9 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from compiler.hardware import NO_TARGET, HardwareProfile, load_profile
 from compiler.program import CompiledProgram
+from ir.errors import CompileError
 
 __all__ = ["Pass", "CompileContext", "run_pipeline", "Progress"]
 
@@ -55,8 +57,11 @@ class CompileContext:
 
     Parameters
     ----------
-    target : object, optional
-        The hardware profile (``compiler.hardware``), None for an unbounded target.
+    target : HardwareProfile
+        The hardware profile every pass and lowering rule reads
+        (:class:`~compiler.hardware.HardwareProfile`); :data:`~compiler.hardware.NO_TARGET`
+        (the default) for a compile without one.  A built-in name or a YAML path is
+        loaded here, once.
     calibration_inputs : dict of str to ndarray
         Sample inputs by input node id, for the calibrate pass.
     lowering : object, optional
@@ -69,11 +74,19 @@ class CompileContext:
         ``progress(pass_name, message)`` for long work (silent by default).
     """
 
-    target: Any = None
+    target: HardwareProfile = NO_TARGET
     calibration_inputs: Mapping[str, Any] = field(default_factory=dict)
     lowering: Any = None
     evaluators: Mapping[type, Callable[..., Any]] = field(default_factory=dict)
     progress: Progress = _silent
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.target, HardwareProfile):
+            if self.target is None:  # the old "no target": say what to give instead
+                raise CompileError("CompileContext(target=None): give a HardwareProfile, a "
+                                   "profile name or path, or compiler.hardware.NO_TARGET for "
+                                   "a compile without a target")
+            self.target = load_profile(self.target)
 
 
 @dataclass(frozen=True)

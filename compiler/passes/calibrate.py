@@ -221,7 +221,7 @@ class Calibrate(Pass):
                         per_node.setdefault(node, []).append(value)
             nodes = {n: measure(n, np.stack(v), normalize_axes=norm.get(n, ()),
                                 axes=types[n].names) for n, v in per_node.items()}
-            if getattr(ctx.target, "weight_bits", None) is not None:
+            if ctx.target.number_format.integer:
                 _add_second_moments(graph, types, per_node, nodes)
             for n in graph.input_ids():  # compile-time only: the lowering's measured choices
                 if n in per_node and n in nodes:

@@ -124,7 +124,7 @@ class Placement:
 
 
 def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
-          profile: HardwareProfile | None = None, *, placer: Placer = greedy_placer,
+          profile: HardwareProfile | str = "unbounded", *, placer: Placer = greedy_placer,
           sim_results: Sequence | None = None, chip_assignment: str = "traffic") -> Placement:
     """Place the blocks of all ``networks`` (resident together) onto the profile's cores.
 
@@ -134,8 +134,8 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
         The program's networks.
     splits : sequence of SplitRecord, optional
         Their splits (computed here when omitted).
-    profile : HardwareProfile, optional
-        The target (``None``: ``unbounded``).
+    profile : HardwareProfile or str, default "unbounded"
+        The target: a profile, or a built-in name or YAML path (loaded).
     placer : Placer
         The placement function (default :func:`greedy_placer`).
     sim_results : sequence of SimResult, optional
@@ -253,7 +253,7 @@ class Place(Pass):
                                "of traffic, placer")
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        profile = load_profile(ctx.target)
+        profile = ctx.target
         mode = self.repetitions
         networks = program.networks
         splits = program.records.splits or split_program(networks, profile, mode)

@@ -21,7 +21,7 @@ weights in the profile's format (:mod:`compiler.hardware.formats`): a signed man
   :math:`w' = \mathrm{round}(w / (s_T 2^{e_p}))\,2^{e_p}`,
   :math:`v_{th}' = \max(1, \mathrm{round}(v_{th} / s_T))`.
 
-Thresholds must fit ``HardwareProfile.threshold_max`` (times the largest per-neuron
+Thresholds must fit ``NumberFormat.threshold_max`` (times the largest per-neuron
 scale) and biases the bias mantissa/exponent; decays are rounded to multiples of
 ``1/4096``.  The record states, per projection, the unit, the exponent and terms, the
 largest and mean absolute error (and relative to its own ``max|w|``), the weights rounded
@@ -107,10 +107,11 @@ def _exact_unit(pop: Population, incoming: list, peak: float,
                 profile: HardwareProfile) -> float | None:
     """The largest unit ``2^-j`` in which every weight and parameter is a whole number
     that split terms can hold exactly (None: there is none)."""
+    fmt = profile.number_format
     par = pop.params
     values = np.array([par.v_th, par.v_reset, *(ph.bias for ph in par.phases)])
-    w_max = (1 << (profile.weight_bits - 1)) - 1
-    reach = w_max * 2.0 ** (profile.weight_exponent_max + 7 * 3)  # four 8-bit terms
+    w_max = (1 << (fmt.weight_bits - 1)) - 1
+    reach = w_max * 2.0 ** (fmt.weight_exponent_max + 7 * 3)  # four 8-bit terms
     for j in range(EXACT_UNIT_BITS + 1):
         unit = 2.0 ** -j
         if peak / unit > reach:
@@ -131,8 +132,9 @@ def _split_share(terms: dict[str, list]) -> float:
 def _state_unit(pop: Population, incoming: list, profile: HardwareProfile,
                 allow_exact: bool = True) -> tuple[float, bool]:
     """``(s_T, exact)`` for a population (see the module docstring)."""
-    w_max = (1 << (profile.weight_bits - 1)) - 1
-    e_top = 2.0 ** profile.weight_exponent_max
+    fmt = profile.number_format
+    w_max = (1 << (fmt.weight_bits - 1)) - 1
+    e_top = 2.0 ** fmt.weight_exponent_max
     peaks = [float(np.abs(p.stored_weights()).max(initial=0.0)) for p in incoming]
     peaks = [x for x in peaks if x > 0]
     exact = _exact_unit(pop, incoming, max(peaks, default=0.0), profile) if allow_exact else None
@@ -151,7 +153,7 @@ def _state_unit(pop: Population, incoming: list, profile: HardwareProfile,
 
 def _param_unit(par: NeuronParams, profile: HardwareProfile) -> float:
     """The smallest unit at which threshold, reset and biases fit (0: no limit)."""
-    limit = profile.threshold_max
+    limit = profile.number_format.threshold_max
     if limit is None:
         return 0.0
     peak = max([abs(par.v_th), abs(par.v_reset), *(abs(ph.bias) for ph in par.phases)])
@@ -165,28 +167,31 @@ def _needs_threshold_grid(par: NeuronParams, profile: HardwareProfile) -> bool:
     threshold ``θ``: a shared grid threshold ``θ' ≥ θ`` and the initial membrane ``θ' − θ``
     give the same spikes (per-neuron initial state, ``per_neuron_scales``).
     """
-    if not profile.threshold_shift:
+    fmt = profile.number_format
+    if not fmt.threshold_shift:
         return False
-    offset_ok = profile.per_neuron_scales and par.dv == 0.0 and par.reset != "value"
+    offset_ok = fmt.per_neuron_scales and par.dv == 0.0 and par.reset != "value"
     return not offset_ok
 
 
 def _fit(pop: Population, what: str, value: float, profile: HardwareProfile) -> None:
-    limit = profile.threshold_max
+    fmt = profile.number_format
+    limit = fmt.threshold_max
     if limit is not None and abs(value) > limit:
         raise BudgetError(
             f"{describe(pop)}: quantized {what} {value:.0f} exceeds the {what} range of "
-            f"{profile.name} (limit {limit}: {profile.threshold_bits}-bit state"
-            + (f", {profile.threshold_mantissa_bits}-bit mantissa << {profile.threshold_shift}"
-               if profile.threshold_mantissa_bits else "")
+            f"{profile.name} (limit {limit}: {fmt.threshold_bits}-bit state"
+            + (f", {fmt.threshold_mantissa_bits}-bit mantissa << {fmt.threshold_shift}"
+               if fmt.threshold_mantissa_bits else "")
             + "); raise the weights relative to the threshold in the lowering, use fewer "
             "time steps, or a target with wider thresholds", node=pop.origin.get("node", pop.id))
 
 
 def _quantize_params(pop: Population, unit: float, profile: HardwareProfile
                      ) -> tuple[NeuronParams, dict]:
+    fmt = profile.number_format
     par = pop.params
-    if par.scale_axis is not None and not profile.per_neuron_scales:
+    if par.scale_axis is not None and not fmt.per_neuron_scales:
         raise BudgetError(
             f"{describe(pop)}: needs per-neuron threshold/bias scales along "
             f"{par.scale_axis!r}, which {profile.name} does not provide (per_neuron_scales: "
@@ -196,15 +201,15 @@ def _quantize_params(pop: Population, unit: float, profile: HardwareProfile
     v_th = max(1.0, float(np.rint(par.v_th / unit)))
     v_reset = float(np.rint(par.v_reset / unit))
     if _needs_threshold_grid(par, profile):
-        grid = 2.0 ** profile.threshold_shift  # the unit was divided by it: whole in grid steps
+        grid = 2.0 ** fmt.threshold_shift  # the unit was divided by it: whole in grid steps
         v_th = max(grid, float(np.rint(par.v_th / (unit * grid)) * grid))
     for what, v in (("threshold", v_th * top), ("reset", v_reset * top)):
         _fit(pop, what, v, profile)
     phases, bias_error = [], 0.0
     for ph in par.phases:
         b = float(np.rint(ph.bias / unit))
-        b = bias_value(b, mantissa_bits=profile.bias_mantissa_bits,
-                       exponent_max=profile.bias_exponent_max)
+        b = bias_value(b, mantissa_bits=fmt.bias_mantissa_bits,
+                       exponent_max=fmt.bias_exponent_max)
         bias_error = max(bias_error, abs(b * unit - ph.bias))
         _fit(pop, "bias", b * top, profile)
         phases.append(ph.model_copy(update={"bias": b}))
@@ -230,16 +235,17 @@ def _rescaled(dec: Decoder, units: dict[str, float]) -> Decoder:
 def _projection_terms(p, pop: Population, unit: float, exact: bool,
                       profile: HardwareProfile, record: QuantizeRecord) -> list:
     """``p`` in the target's weight format: itself, plus split terms of an exact weight."""
+    fmt = profile.number_format
     w = p.stored_weights()
-    w_max = (1 << (profile.weight_bits - 1)) - 1
-    terms = weight_terms(w / unit, w_max, profile.weight_exponent_max, exact=exact)
+    w_max = (1 << (fmt.weight_bits - 1)) - 1
+    terms = weight_terms(w / unit, w_max, fmt.weight_exponent_max, exact=exact)
     q = sum(t for _, t in terms)
     live = w != 0
     err = np.abs(q * unit - w)[live]
     own = float(np.abs(w).max(initial=0.0))
     extra = [int(np.count_nonzero(t)) for _, t in terms[1:]]
     record.projections[p.id] = {
-        "scale": unit, "exponent": terms[0][0], "mantissa_bits": profile.weight_bits,
+        "scale": unit, "exponent": terms[0][0], "mantissa_bits": fmt.weight_bits,
         "terms": [{"exponent": e, "synapses": int(np.count_nonzero(t))} for e, t in terms],
         "extra_weights": sum(extra), "exact": exact and not err.any(),
         "max_abs_error": float(err.max(initial=0.0)),
@@ -258,7 +264,7 @@ def _projection_terms(p, pop: Population, unit: float, exact: bool,
     return out
 
 
-def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
+def quantize(network: SpikingNetwork, profile: HardwareProfile | str = "unbounded", *,
              long_delays: LongDelays = "error") -> tuple[SpikingNetwork, QuantizeRecord]:
     """Quantize ``network`` to the profile's weight, threshold, bias and delay formats.
 
@@ -266,8 +272,9 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     ----------
     network : SpikingNetwork
         A validated network.
-    profile : HardwareProfile, optional
-        The target (``None``: ``unbounded``, which changes nothing).
+    profile : HardwareProfile or str, default "unbounded"
+        The target: a profile, or a built-in name or YAML path (loaded);
+        ``unbounded`` changes nothing.
     long_delays : {"error", "relay"}
         What to do with a delay beyond the profile's maximum.
 
@@ -282,9 +289,10 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
         or per-neuron scales on a target without them.
     """
     profile = load_profile(profile)
+    fmt = profile.number_format
     record = QuantizeRecord(profile=profile.name)
     net = relay_long_delays(network, profile, long_delays, record)
-    if profile.weight_bits is None:
+    if fmt.weight_bits is None:
         return net, record
     new_pops, new_projs, units = [], {}, {}
     for pop in net.populations:
@@ -304,12 +312,12 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
             # thresholds are a mantissa << shift and no per-neuron offset can stand in:
             # the whole population moves up by the shift (weights gain exponent, as a weight
             # exponent of 0 on Loihi lines the weight up with the threshold's shift)
-            unit /= 2.0 ** profile.threshold_shift
+            unit /= 2.0 ** fmt.threshold_shift
             terms = {p.id: _projection_terms(p, pop, unit, exact, profile, record)
                      for p in incoming}
         new_projs.update(terms)
         coarsened = not exact and _param_unit(pop.params, profile) >= unit > 0 and incoming
-        params, info = (_quantize_params(pop, unit, profile) if profile.threshold_max
+        params, info = (_quantize_params(pop, unit, profile) if fmt.threshold_max
                         else (pop.params, {"scale": unit}))
         info.update(weights_coarsened_for_threshold=bool(coarsened), exact=exact)
         record.populations[pop.id] = info
@@ -319,8 +327,8 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     out = replace(net, populations=new_pops, projections=projections,
                   decoders=[_rescaled(d, units) for d in net.decoders])
     out.meta = {**net.meta, "quantized_for": profile.name}
-    if profile.state_bits is not None:  # the simulator counts states beyond it
-        out.meta["state_bits"] = profile.state_bits
+    if fmt.state_bits is not None:  # the simulator counts states beyond it
+        out.meta["state_bits"] = fmt.state_bits
     return out, record
 
 
@@ -339,7 +347,7 @@ class Quantize(Pass):
     long_delays: LongDelays = "relay"
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        profile = load_profile(ctx.target)
+        profile = ctx.target
         mode = self.long_delays
         records, segments = [], []
         for seg in program.segments:

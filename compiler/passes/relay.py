@@ -55,7 +55,7 @@ def _split_by_delay(p, limit: int):
 
 def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_delays: LongDelays,
                       record: QuantizeRecord | None = None) -> SpikingNetwork:
-    """Replace delays beyond ``profile.max_delay_steps`` by relay chains, or raise.
+    """Replace delays beyond ``profile.number_format.max_delay_steps`` by relay chains, or raise.
 
     Examples
     --------
@@ -70,7 +70,7 @@ def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_de
     >>> [p.id for p in out.populations], [p.max_delay for p in out.projections]
     (['x', 'y', 'x__relay1', 'x__relay2'], [3, 3, 1])
     """
-    limit = profile.max_delay_steps
+    limit = profile.number_format.max_delay_steps
     if limit is None or all(p.max_delay <= limit for p in network.projections):
         return network
     pops = network.population
@@ -79,7 +79,8 @@ def relay_long_delays(network: SpikingNetwork, profile: HardwareProfile, long_de
         tgt = pops[p.target]
         raise BudgetError(
             f"{describe(tgt)}: projection {p.id!r} has a delay of {p.max_delay} steps but "
-            f"{profile.name} allows at most {limit} ({profile.delay_bits} delay bits); "
+            f"{profile.name} allows at most {limit} ({profile.number_format.delay_bits} delay "
+            "bits); "
             + ("compile with long_delays='relay' to insert relay neurons, or use fewer time "
                "steps" if limit else "a target without delays cannot relay them; use a target "
                "with delay bits"),

@@ -131,7 +131,7 @@ def split_population(network: SpikingNetwork, pop: Population, profile: Hardware
     return model.demand(blocks(n), bits_per_synapse=bits, reach=reach)
 
 
-def split(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
+def split(network: SpikingNetwork, profile: HardwareProfile | str = "unbounded", *,
           multiplexed: Collection[str] = ()) -> SplitRecord:
     """Cut every neuron population of ``network`` into blocks that fit one core each.
 
@@ -139,8 +139,8 @@ def split(network: SpikingNetwork, profile: HardwareProfile | None = None, *,
     ----------
     network : SpikingNetwork
         A validated network.
-    profile : HardwareProfile, optional
-        The target (``None``: ``unbounded``).
+    profile : HardwareProfile or str, default "unbounded"
+        The target: a profile, or a built-in name or YAML path (loaded).
     multiplexed : collection of str
         Stages (IR nodes) to time-multiplex: only one instance of each is split.
 
@@ -188,7 +188,7 @@ def _split_network(network: SpikingNetwork, profile: HardwareProfile,
     return record
 
 
-def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile | None = None,
+def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile | str = "unbounded",
                   repetitions: str = "auto", *, start: int = 0) -> list[SplitRecord]:
     """Split all networks of a program (resident together) under a repetition mode.
 
@@ -196,8 +196,8 @@ def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile |
     ----------
     networks : sequence of SpikingNetwork
         The program's networks.
-    profile : HardwareProfile, optional
-        The target (``None``: ``unbounded``).
+    profile : HardwareProfile or str, default "unbounded"
+        The target: a profile, or a built-in name or YAML path (loaded).
     repetitions : {"auto", "spatial", "temporal"}
         ``spatial``: unroll every repetition; ``temporal``: multiplex every
         multiplexable stage; ``auto``: the first plan, spatial then the
@@ -276,7 +276,7 @@ class Split(Pass):
         repetition_mode(self.repetitions)
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
-        profile = load_profile(ctx.target)
+        profile = ctx.target
         mode = self.repetitions
         ctx.progress(self.name, f"{len(program.networks)} network(s), repetitions={mode}")
         program.records.splits = split_program(program.networks, profile, mode)

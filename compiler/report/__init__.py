@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from compiler.hardware import BUDGETS, load_profile
+from compiler.hardware import BUDGETS
 from compiler.report.boundaries import boundary_rows
 from compiler.report.chips import chip_rows
 from compiler.report.conventional import conventional_rows
@@ -91,7 +91,7 @@ def build_report(program, *, sim_results: Sequence | None = None,
     >>> [(r["name"], round(r["memory_kB"], 1)) for r in rep.data["frame_io"]][-1]
     ('ra_map', 131.1)
     """
-    profile = load_profile(program.target)
+    profile = program.sized_for
     rate = float(frame_rate_hz or 10.0)  # the ReportPass gives the option frame_rate_hz
     networks = program.networks
     splits = program.records.splits or [None] * len(networks)
@@ -202,4 +202,4 @@ def add_measured_activity(report: Report, program, sim_results: Sequence) -> Non
         for row in report.data["stages"]:
             if row["network"] == net.name and row["node"] in fields:
                 row.update(fields[row["node"]])
-    report.data["energy"] = _energy(report.data, program, load_profile(program.target))
+    report.data["energy"] = _energy(report.data, program, program.sized_for)

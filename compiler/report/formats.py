@@ -32,8 +32,6 @@ Examples
 
 from __future__ import annotations
 
-from compiler.hardware import load_profile
-
 __all__ = ["format_rows"]
 
 
@@ -44,7 +42,7 @@ def _instances(net, proj) -> int:
 
 def format_rows(program) -> list[dict]:
     """Rows ``{node, item, mechanism, detail, cost}`` for the report (see the module doc)."""
-    profile = load_profile(program.target)
+    profile = program.sized_for
     records = program.records.quantization
     rows: list[dict] = []
     for k, net in enumerate(program.networks):
@@ -62,7 +60,7 @@ def format_rows(program) -> list[dict]:
                 rows.append({"node": node, "item": proj.id, "mechanism": "split_synapses",
                              "detail": "a further term of whole weights beyond one exponent",
                              "cost": f"{_instances(net, proj):,} synapses"})
-        bits = 3 + (profile.state_bits or 24)
+        bits = 3 + profile.number_format.state_width
         for pop in net.populations:
             par = pop.params
             if par.scale_axis is not None:
@@ -92,6 +90,7 @@ def format_rows(program) -> list[dict]:
                              "detail": f"values up to {guard['ratio']:g}x the calibrated full "
                                        "scale coded, not clipped",
                              "cost": f"{guard['steps']} of {ch['n_steps']} charging steps"})
+        state = profile.number_format.state_bits or 32  # float state: a float32
         for node, r in (net.meta.get("resonator") or {}).items():
             pop = net.population.get(f"{node}/out")
             n_res = pop.size // 4 if pop is not None else 0
@@ -102,8 +101,8 @@ def format_rows(program) -> list[dict]:
                                    f"{r['input_steps']} steps, "
                                    f"{r['readout']} read-out: {r['input_steps']} + "
                                    f"{r['readout_steps']} steps per chirp",
-                         "cost": f"{n_res:,} resonators x 2 x {profile.state_bits or 32} bits "
-                                 f"= {n_res * 2 * (profile.state_bits or 32) / 8192:.1f} kB"})
+                         "cost": f"{n_res:,} resonators x 2 x {state} bits "
+                                 f"= {n_res * 2 * state / 8192:.1f} kB"})
         for enc in net.encoders:
             if getattr(enc.code, "rounding", None) == "dither":
                 rows.append({"node": enc.node or enc.port, "item": enc.population,
