@@ -2,6 +2,10 @@
 
 The project's own packages stay where the design puts them (``ir``, ``compiler``,
 ``backends``, ``radar``); this package gathers what a user needs first under one name.
+It is also the application layer: the ``radarsnn`` command (:mod:`radarsnn.cli`), the
+demo (:mod:`radarsnn.demo`), the sweeps (:mod:`radarsnn.sweep`) and the benchmark
+(:mod:`radarsnn.bench`).  A name is imported from its home module on first use, so the
+command line starts without loading numpy and the compiler.
 
 Examples
 --------
@@ -20,28 +24,46 @@ True
 
 from __future__ import annotations
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
-from backends import load, load_program, save, save_program
-from backends.reference import run_program, simulate
-from backends.reference.accuracy import check_accuracy
-from compiler.program import CompiledProgram
-from ir import Graph, evaluate
 from ir import errors as _errors
 from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
-from ir.ops import DFT, Input, Magnitude, Output, Window
-from radarsnn._chain import *  # noqa: F403  (every IR op, chains, radar presets, scenes)
-from radarsnn._chain import __all__ as _chain_names
-from radarsnn.compile import compile_graph
 
 try:
     __version__ = version("radarsnn")
 except PackageNotFoundError:  # run from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
-__all__ = [
-    "DFT", "CompiledProgram", "Graph", "Input", "Magnitude", "Output", "Window", "__version__",
-    "check_accuracy", "compile_graph",
-    "evaluate", "load", "load_program", "run_program", "save", "save_program",
-    "simulate", *_errors.__all__, *_chain_names,
-]
+#: The home module of each public name, imported when the name is first read.
+HOMES: dict[str, tuple[str, ...]] = {
+    "backends": ("load", "load_program", "save", "save_program"),
+    "backends.reference": ("run_program", "simulate"),
+    "backends.reference.accuracy": ("check_accuracy",),
+    "compiler.program": ("CompiledProgram",),
+    "ir": ("Graph", "evaluate"),
+    "ir.ops": ("DFT", "Input", "Magnitude", "Output", "Window"),
+    "radarsnn.compile": ("compile_graph",),
+    # the IR ops, example chains, radar presets and scenes of radarsnn._chain
+    "radarsnn._chain": (
+        "CFAR", "PRESETS", "SCENE_PRESETS", "Add", "AdcInput", "Classifier", "Cluster", "Linear",
+        "Log", "RadarConfig", "Scene", "Sum", "Target", "Threshold", "Track", "preset",
+        "range_chain", "range_doppler_chain", "simulate_frame", "simulate_frames"),
+}
+_HOME_OF = {name: module for module, names in HOMES.items() for name in names}
+
+__all__ = ["__version__", *_errors.__all__, *_HOME_OF]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its home module (PEP 562) and keep it here."""
+    if name not in _HOME_OF:
+        raise AttributeError(f"module 'radarsnn' has no attribute {name!r}")
+    value = getattr(import_module(_HOME_OF[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOME_OF))

@@ -3,13 +3,13 @@
 Sub-commands live in small modules, each with an ``add_parsers(subparsers)``
 function, collected explicitly in :data:`COMMAND_MODULES`:
 
-* :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
-* :mod:`compiler.cli.run` — ``run``; :mod:`compiler.cli.export_nir` — ``export-nir``;
-  :mod:`compiler.cli.import_nir` — ``import-nir``;
-* :mod:`compiler.cli.demo` — ``demo``, ``bench``;
-* :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
+* :mod:`radarsnn.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
+* :mod:`radarsnn.cli.run` — ``run``; :mod:`radarsnn.cli.export_nir` — ``export-nir``;
+  :mod:`radarsnn.cli.import_nir` — ``import-nir``;
+* :mod:`radarsnn.cli.demo` — ``demo``, ``bench``;
+* :mod:`radarsnn.cli.emit` — ``emit``; :mod:`radarsnn.cli.sweep` — ``sweep``
   (Dask is imported only when a sweep runs);
-* :mod:`backends.crosscheck.command` — ``crosscheck``.
+* :mod:`radarsnn.cli.crosscheck` — ``crosscheck``.
 
 Exit status (:data:`EXIT_OK`, :data:`EXIT_ERROR`, :data:`EXIT_USAGE`): 0 on success;
 1 on a runtime error — an error of the project's hierarchy, an unreadable file, or a
@@ -44,8 +44,8 @@ import warnings
 from collections.abc import Sequence
 from importlib import import_module
 
-from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
+from radarsnn.cli.usage import UsageError
 
 __all__ = ["COMMAND_MODULES", "COMMAND_OF", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE",
            "LOGGED_PACKAGES", "build_parser", "configure_logging", "main", "show_warning"]
@@ -60,19 +60,19 @@ EXIT_USAGE = 2
 LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
 #: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
-COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
-                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
-                   "compiler.cli.import_nir", "backends.crosscheck.command")
+COMMAND_MODULES = ("radarsnn.cli.chain", "radarsnn.cli.run", "radarsnn.cli.demo",
+                   "radarsnn.cli.emit", "radarsnn.cli.sweep", "radarsnn.cli.export_nir",
+                   "radarsnn.cli.import_nir", "radarsnn.cli.crosscheck")
 #: Sub-command -> the module of :data:`COMMAND_MODULES` that adds it.  :func:`main` imports
 #: only the module of the command it runs (none for ``--version``), so a command does not
 #: pay for the others' imports (Dask, the emitter, …); a command missing here makes it
 #: import them all.
-COMMAND_OF = {"validate": "compiler.cli.chain", "schema": "compiler.cli.chain",
-              "compile": "compiler.cli.chain", "report": "compiler.cli.chain",
-              "run": "compiler.cli.run", "demo": "compiler.cli.demo", "bench": "compiler.cli.demo",
-              "emit": "backends.emit.command", "sweep": "compiler.sweep.command",
-              "export-nir": "compiler.cli.export_nir", "import-nir": "compiler.cli.import_nir",
-              "crosscheck": "backends.crosscheck.command"}
+COMMAND_OF = {"validate": "radarsnn.cli.chain", "schema": "radarsnn.cli.chain",
+              "compile": "radarsnn.cli.chain", "report": "radarsnn.cli.chain",
+              "run": "radarsnn.cli.run", "demo": "radarsnn.cli.demo", "bench": "radarsnn.cli.demo",
+              "emit": "radarsnn.cli.emit", "sweep": "radarsnn.cli.sweep",
+              "export-nir": "radarsnn.cli.export_nir", "import-nir": "radarsnn.cli.import_nir",
+              "crosscheck": "radarsnn.cli.crosscheck"}
 
 
 def _version() -> str:
@@ -186,7 +186,7 @@ def _modules_for(argv: Sequence[str]) -> tuple[str, ...] | None:
     Examples
     --------
     >>> _modules_for(["-v", "run", "DIR"]), _modules_for(["--version"]), _modules_for([])
-    (('compiler.cli.run',), (), None)
+    (('radarsnn.cli.run',), (), None)
     """
     for arg in argv:  # the options before the command take no value
         if arg in COMMAND_OF:

@@ -3,7 +3,7 @@
 ``compile`` turns a chain file into a program artifact directory (see
 :mod:`backends.program_artifact`) and checks its accuracy on the calibration data;
 ``report`` prints what a chain (or a compiled artifact) costs on a target.
-``run`` lives in :mod:`compiler.cli.run`.
+``run`` lives in :mod:`radarsnn.cli.run`.
 """
 
 from __future__ import annotations
@@ -13,15 +13,15 @@ import json
 import sys
 from pathlib import Path
 
-from compiler.cli.arrays import (
+from ir.errors import RadarSNNError
+from radarsnn.cli.arrays import (
     INPUT_FORMS,
     MAX_NPY_BYTES,
     bin_layout_argument,
     load_arrays,
     read_npy,
 )
-from compiler.cli.usage import UsageError
-from ir.errors import RadarSNNError
+from radarsnn.cli.usage import UsageError
 
 __all__ = ["MAX_NPY_BYTES", "add_parsers", "compile_chain", "host_fallback_line", "load_arrays",
            "parse_options", "read_npy", "write_output"]
@@ -157,15 +157,15 @@ def compile_chain(chain: str | Path, target: str | None, *,
     Returns
     -------
     (CompiledProgram, str, dict)
-        The program, its calibration note (:mod:`compiler.cli.notes`) and the
+        The program, its calibration note (:mod:`radarsnn.cli.notes`) and the
         calibration inputs it was compiled on.
     """
     from compiler.calibration import synthetic_inputs
-    from compiler.cli.notes import GIVEN_NOTE, SYNTHETIC_NOTE
     from compiler.compile import compile_graph, default_pipeline
     from compiler.compile_guards import check_compile, limits_from_options
     from compiler.progress import make_progress
     from ir import Graph
+    from radarsnn.cli.notes import GIVEN_NOTE, SYNTHETIC_NOTE
 
     graph = Graph.from_yaml(chain)
     options = dict(options or {})
@@ -178,7 +178,7 @@ def compile_chain(chain: str | Path, target: str | None, *,
                              bin_layout=bin_layout,
                              shapes={port: types[port].shape for port in graph.input_ids()})
         note = GIVEN_NOTE
-    else:  # the counts that depend on it: compiler.cli.notes
+    else:  # the counts that depend on it: radarsnn.cli.notes
         inputs = synthetic_inputs(graph, seed=0)
         note = SYNTHETIC_NOTE
     n_passes = len(default_pipeline(options, hardware=target is not None))
@@ -237,7 +237,7 @@ def _warn_accuracy(program, calibration: dict, note: str) -> None:
     ``program.records["accuracy"]`` (saved in the artifact's ``extra``).
     """
     from backends.reference.accuracy import check_accuracy
-    from compiler.cli.notes import GIVEN_NOTE
+    from radarsnn.cli.notes import GIVEN_NOTE
 
     check = check_accuracy(program, calibration)
     program.records.accuracy = check
@@ -334,7 +334,7 @@ def _energy_summary(report) -> dict:
 
 def _cmd_report(args: argparse.Namespace) -> int:
     from backends import is_program, load_program
-    from compiler.cli.notes import artifact_note
+    from radarsnn.cli.notes import artifact_note
 
     if Path(args.chain).is_dir():
         if not is_program(args.chain):

@@ -83,8 +83,8 @@ def export_nir(args: argparse.Namespace):
     from backends import is_program, load
     from backends.atomic import check_output
     from backends.nir import export_network, export_program, write_nir
-    from compiler.cli.chain import _compile  # the compile of `radarsnn compile`/`report`
-    from compiler.cli.notes import artifact_note
+    from radarsnn.cli.chain import _compile  # the compile of `radarsnn compile`/`report`
+    from radarsnn.cli.notes import artifact_note
 
     path = check_output(args.output)  # before any work: a device, a folder, a NUL byte
     check_output(path.with_suffix(".report.json"))

@@ -342,7 +342,7 @@ class SweepSpec(_Model):
         """Frames scored per point (a folder's count is read from the disk)."""
         if self.frames.source == "scene":
             return self.frames.n_frames
-        from compiler.sweep.frames import folder_files
+        from radarsnn.sweep.frames import folder_files
 
         return len(folder_files(self.frames, self.base_dir)[0])
 
