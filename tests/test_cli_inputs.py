@@ -203,12 +203,13 @@ def test_version_imports_no_command_module():
 def test_each_command_is_added_by_the_module_main_imports_for_it():
     import argparse
 
-    from radarsnn.cli import COMMAND_MODULES, COMMAND_OF, build_parser
+    from radarsnn.cli import COMMANDS, build_parser
 
     def commands(parser):
         (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-        return set(sub.choices)
+        return list(sub.choices)
 
-    assert commands(build_parser()) == set(COMMAND_OF)
-    for name, module in COMMAND_OF.items():
-        assert module in COMMAND_MODULES and name in commands(build_parser([module]))
+    assert commands(build_parser()) == list(COMMANDS)  # every command, in the table's order
+    for name, load in COMMANDS.items():
+        assert name in commands(build_parser([load()]))
+        assert load().__name__.startswith("radarsnn.cli.")
