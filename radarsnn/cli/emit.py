@@ -14,7 +14,7 @@ from pathlib import Path
 
 from backends.emit import EMITTERS
 from ir.errors import CompileError
-from radarsnn.cli.chain import compile_chain
+from radarsnn.cli.compiling import compile_chain
 
 __all__ = ["add_parsers", "run_emit"]
 
