@@ -39,7 +39,7 @@ from radarsnn.demo.figures import (  # noqa: E402
 from radarsnn.demo.rasters import spike_figure  # noqa: E402
 from radarsnn.demo.scenes import run_scene  # noqa: E402
 from radarsnn.sweep.figures import _pareto, pick_cost  # noqa: E402
-from radarsnn.sweep.spec import FigureSpec  # noqa: E402
+from radarsnn.sweep.sections import FigureSpec  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ import pytest
 
 from ir.errors import RadarConfigError
 from radarsnn.sweep.frames import folder_files, frame_rng, load_frames, random_scene
-from radarsnn.sweep.spec import FolderFrames, SceneFrames
+from radarsnn.sweep.sections import FolderFrames, SceneFrames
 
 
 def test_scene_frame_does_not_depend_on_its_slice_and_streams_differ():
@@ -73,7 +73,7 @@ def test_hostile_folder_sources_are_typed_errors(tmp_path):
     os.mkfifo(tmp_path / "f3.npy")  # a reader opening it would wait for a writer forever
     done = run_capped(
         "from radarsnn.sweep.frames import folder_files\n"
-        "from radarsnn.sweep.spec import FolderFrames\nfrom ir.errors import RadarConfigError",
+        "from radarsnn.sweep.sections import FolderFrames\nfrom ir.errors import RadarConfigError",
         f"""
         try:
             folder_files(FolderFrames(source="folder", path="."), {str(tmp_path)!r})

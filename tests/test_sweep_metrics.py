@@ -21,7 +21,7 @@ from radarsnn.sweep.metrics import (
     detection_counts,
     sensitivity_precision,
 )
-from radarsnn.sweep.spec import FigureSpec
+from radarsnn.sweep.sections import FigureSpec
 
 REG = default_metrics()
 

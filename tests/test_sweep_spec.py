@@ -10,7 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from ir.errors import CompileError
-from radarsnn.sweep.spec import SweepSpec, cell_key, load_spec, parse_spec
+from radarsnn.sweep.cells import cell_key
+from radarsnn.sweep.spec import SweepSpec, load_spec, parse_spec
 
 CHAIN = {"name": "c", "nodes": [
     {"id": "x", "op": "input", "shape": {"range": 16, "doppler": 8}},
@@ -193,7 +194,7 @@ def test_expanded_bytes_stops_on_cycles_and_counts_keys():
                                                                  max_size=3),
     max_leaves=6), min_size=1, max_size=4), split=st.integers(0, 4))
 def test_cell_keys_built_part_by_part_equal_the_whole(parts, split):
-    from radarsnn.sweep.spec import Canonical, CellKey
+    from radarsnn.sweep.cells import Canonical, CellKey
 
     head, tail = parts[:split], parts[split:]
     assert CellKey(*head).then(*tail).hex() == cell_key(*parts)

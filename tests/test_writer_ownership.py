@@ -166,7 +166,8 @@ def test_output_paths_that_are_no_file_are_refused_in_one_line(files, tmp_path, 
 
 def test_sweep_figure_names_must_be_plain_file_names(tmp_path):
     from radarsnn.sweep.figures import draw_figures
-    from radarsnn.sweep.spec import FigureSpec, parse_spec
+    from radarsnn.sweep.sections import FigureSpec
+    from radarsnn.sweep.spec import parse_spec
 
     base = {"name": "s", "chains": {"c": "c.yaml"},
             "frames": {"source": "scene", "n_frames": 1, "frames_per_cell": 1}}

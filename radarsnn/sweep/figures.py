@@ -27,7 +27,7 @@ import numpy as np
 
 from ir.errors import CompileError
 from radarsnn.cli.chain import write_output
-from radarsnn.sweep.spec import FigureSpec
+from radarsnn.sweep.sections import FigureSpec
 
 __all__ = ["pareto_front", "pick_cost", "draw_figures", "MAIN_FIELD"]
 

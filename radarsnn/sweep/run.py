@@ -31,6 +31,7 @@ from typing import Any
 
 from backends.atomic import check_output
 from ir.errors import CompileError
+from radarsnn.sweep.cells import Canonical, CellKey, cell_key
 from radarsnn.sweep.executors import DaskExecutor, SyncExecutor
 from radarsnn.sweep.frames import folder_files, load_frames
 from radarsnn.sweep.metrics import NODE_OPS, MetricRegistry, default_metrics
@@ -41,7 +42,7 @@ from radarsnn.sweep.results import (
     summarize,
     write_summary,
 )
-from radarsnn.sweep.spec import Canonical, CellKey, SweepSpec, cell_key, load_spec
+from radarsnn.sweep.spec import SweepSpec, load_spec
 from radarsnn.sweep.tasks import CellTask, compile_point, evaluate_cell, reference_values
 
 __all__ = ["SweepResult", "run_sweep", "plan_cells"]

@@ -93,7 +93,7 @@ def _cases(tmp) -> dict[str, tuple[str, str]]:
                                f"model_construct(weights={str(tmp / 'in.npz')!r}), (16, 16), "
                                "'cls')", "over the limit"),
         "folder frame": ("from radarsnn.sweep.frames import load_frames; from radarsnn.sweep."
-                         "spec import FolderFrames; load_frames(FolderFrames(source='folder', "
+                         "sections import FolderFrames; load_frames(FolderFrames(source='folder', "
                          f"path='frames'), {str(tmp)!r}, 0, 1, calibration=True)",
                          "over the limit"),
     }
