@@ -26,6 +26,7 @@ import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this source tree, not whatever an installed radarsnn points at
 PROFILES = ("loihi", "loihi2", "spinnaker2", "unbounded")
 SCENES = ("seed003", "carrada")
 
