@@ -1,6 +1,8 @@
 """Accuracy-vs-resources sweeps: a grid of compile options × frames, run on Dask.
 
 * :mod:`~radarsnn.sweep.spec` — the sweep file (:func:`load_spec`, :class:`SweepSpec`);
+  :mod:`~radarsnn.sweep.sections` — its frames, metrics and figures sections;
+  :mod:`~radarsnn.sweep.cells` — the cell ids;
 * :mod:`~radarsnn.sweep.frames` — frame sources (scene simulator, ``.npy`` folder);
 * :mod:`~radarsnn.sweep.metrics` — accuracy metrics (:func:`default_metrics`);
 * :mod:`~radarsnn.sweep.cost` — neurons, synapses, cores, steps, spikes of a cell;
