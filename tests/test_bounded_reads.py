@@ -94,8 +94,8 @@ def test_a_bin_capture_is_checked_against_the_port_before_it_is_read(tmp_path):
     capture = tmp_path / "big.bin"
     with capture.open("wb") as f:
         f.truncate(512 * _MIB)
-    kind, text, seconds = _outcome(
-        "from radarsnn.cli.arrays import load_arrays",
+    kind, text, seconds = _outcome(  # the readers' imports (scipy) before the cap
+        "import radar.readers, radar.ti_capture\nfrom radarsnn.cli.arrays import load_arrays",
         f"load_arrays([{str(capture)!r}], ['adc'], 'chain c', "
         "bin_layout='samples=256,chirps=128,rx=4', shapes={'adc': (4, 64, 256)})",
         headroom_bytes=256 * _MIB)
