@@ -72,3 +72,14 @@ def test_the_public_names_load_on_first_use() -> None:
     from radarsnn import HOMES, _chain
 
     assert HOMES["radarsnn._chain"] == tuple(_chain.__all__)
+
+
+def test_the_console_script_is_the_application_package() -> None:
+    """The console script ``radarsnn`` is :func:`radarsnn.cli.main`, as ``python -m radarsnn``."""
+    from importlib import import_module
+
+    tomllib = pytest.importorskip("tomllib")
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    module, _, name = config["project"]["scripts"]["radarsnn"].partition(":")
+    assert module.split(".")[0] == "radarsnn"
+    assert getattr(import_module(module), name) is import_module("radarsnn.__main__").main

@@ -61,7 +61,6 @@ EXIT_USAGE = 2
 LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
 
-
 # One function per command module: a normal import, made when a command needs it.
 def _chain() -> ModuleType:
     from radarsnn.cli import chain
