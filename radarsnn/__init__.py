@@ -36,7 +36,9 @@ try:
 except PackageNotFoundError:  # run from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
-#: The home module of each public name, imported when the name is first read.
+#: The home module of each public name outside :mod:`radarsnn._chain`, imported when the name
+#: is first read; every name of ``radarsnn._chain.__all__`` (the IR ops, example chains, radar
+#: presets and scenes) is read from there.
 HOMES: dict[str, tuple[str, ...]] = {
     "backends": ("load", "load_program", "save", "save_program"),
     "backends.reference": ("run_program", "simulate"),
@@ -45,25 +47,28 @@ HOMES: dict[str, tuple[str, ...]] = {
     "ir": ("Graph", "evaluate"),
     "ir.ops": ("DFT", "Input", "Magnitude", "Output", "Window"),
     "radarsnn.compile": ("compile_graph",),
-    # the IR ops, example chains, radar presets and scenes of radarsnn._chain
-    "radarsnn._chain": (
-        "CFAR", "PRESETS", "SCENE_PRESETS", "Add", "AdcInput", "Classifier", "Cluster", "Linear",
-        "Log", "RadarConfig", "Scene", "Sum", "Target", "Threshold", "Track", "preset",
-        "range_chain", "range_doppler_chain", "simulate_frame", "simulate_frames"),
 }
 _HOME_OF = {name: module for module, names in HOMES.items() for name in names}
-
-__all__ = ["__version__", *_errors.__all__, *_HOME_OF]
+_CHAIN = "radarsnn._chain"
 
 
 def __getattr__(name: str) -> Any:
-    """Import a public name from its home module (PEP 562) and keep it here."""
-    if name not in _HOME_OF:
+    """Import a public name from its home module (PEP 562) and keep it here.
+
+    ``__all__`` too is made on first use: it takes the chain module's names.
+    """
+    if name == "__all__":
+        value = list(dict.fromkeys(["__version__", *_errors.__all__, *_HOME_OF,
+                                    *import_module(_CHAIN).__all__]))
+    elif name in _HOME_OF:
+        value = getattr(import_module(_HOME_OF[name]), name)
+    elif name.startswith("__") or name not in import_module(_CHAIN).__all__:
         raise AttributeError(f"module 'radarsnn' has no attribute {name!r}")
-    value = getattr(import_module(_HOME_OF[name]), name)
+    else:
+        value = getattr(import_module(_CHAIN), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOME_OF))
+    return sorted(set(globals()) | set(__getattr__("__all__")))

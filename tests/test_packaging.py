@@ -60,7 +60,7 @@ def test_the_public_names_resolve() -> None:
 
 def test_the_public_names_load_on_first_use() -> None:
     """``import radarsnn`` (and so the command line, :mod:`radarsnn.cli`) loads no numpy;
-    every name of the chain module is listed under its home."""
+    ``__all__`` is every name of :data:`radarsnn.HOMES` and of the chain module, once."""
     import subprocess
     import sys
 
@@ -69,9 +69,16 @@ def test_the_public_names_load_on_first_use() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=ROOT, check=True)
     assert done.stdout.splitlines() == ["[]", "type"]
+    import radarsnn
     from radarsnn import HOMES, _chain
 
-    assert HOMES["radarsnn._chain"] == tuple(_chain.__all__)
+    names = [n for home in HOMES.values() for n in home]
+    assert set(radarsnn.__all__) == {"__version__", *radarsnn._errors.__all__, *names,
+                                     *_chain.__all__}
+    assert len(radarsnn.__all__) == len(set(radarsnn.__all__))
+    assert set(radarsnn.__all__) <= set(dir(radarsnn))
+    with pytest.raises(AttributeError, match="no attribute 'not_a_name'"):
+        radarsnn.not_a_name  # noqa: B018
 
 
 def test_the_console_script_is_the_application_package() -> None:
