@@ -26,6 +26,7 @@ import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this source tree, not whatever an installed radarsnn points at
 PROFILES = ("loihi", "loihi2", "spinnaker2", "unbounded")
 SCENES = ("seed003", "carrada")
 
@@ -34,10 +35,10 @@ def _cases():
     """(name, graph, calibration inputs or None) for every example chain and demo scene."""
     from compiler.calibration import synthetic_inputs
     from compiler.chains import range_doppler_chain
-    from compiler.demo.scenes import CALIBRATION_SEED_OFFSET
     from ir import Graph
     from radar.config import preset
     from radar.scene import SCENE_PRESETS, simulate_frame
+    from radarsnn.demo.scenes import CALIBRATION_SEED_OFFSET
 
     for path in sorted((ROOT / "examples" / "chains").glob("*.yaml")):
         graph = Graph.from_yaml(path)

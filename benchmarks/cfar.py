@@ -25,8 +25,8 @@ import time
 import numpy as np
 
 from compiler.compile import lower_pass
-from compiler.sweep.frames import random_scene  # the sweep's scene model, shared
 from ir import Graph
+from radarsnn.sweep.frames import random_scene  # the sweep's scene model, shared
 
 __all__ = ["ALPHA", "K_OS", "rd_maps", "random_scene", "study_graph", "score", "main"]
 

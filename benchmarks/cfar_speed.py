@@ -34,10 +34,10 @@ __all__ = ["power_map", "median_s", "main"]
 
 def power_map(seed: int = 0) -> np.ndarray:
     """One linear-power ``(256, 64)`` range-Doppler map of a random carrada scene."""
-    from compiler.sweep.frames import random_scene
     from radar.config import preset
     from radar.scene import simulate_frame
     from radar.spectra import range_doppler_map
+    from radarsnn.sweep.frames import random_scene
 
     cfg, rng = preset("carrada"), np.random.default_rng(seed)
     frame = simulate_frame(cfg, random_scene(rng), seed=int(rng.integers(2**31)))

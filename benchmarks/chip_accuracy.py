@@ -17,7 +17,7 @@ For each hardware profile (loihi2, loihi, spinnaker2, unbounded) the chain is co
 * the two real OpenRadar TI captures (``radar/data/openradar``), each calibrated on the
   other: cell sensitivity / precision of a range–Doppler OS-CFAR chain.
 
-and the hard cases of :data:`compiler.demo.hard_cases.HARD_CASES` (``--case`` picks some and
+and the hard cases of :data:`radarsnn.demo.hard_cases.HARD_CASES` (``--case`` picks some and
 skips the rows above): scenes of :mod:`radar.scene_cases` drawn afresh per seed, calibrated
 on seeds 100–101, measured on seeds 0–2 (``--seeds``): leakage 40–70 dB above the targets
 on a 3 Tx × 4 Rx 12-bit sensor, a clipping ADC, targets near the noise threshold, range
@@ -45,8 +45,6 @@ import numpy as np
 from backends.reference import run_program
 from compiler.chains import capture_chain, range_doppler_chain
 from compiler.compile import compile_graph
-from compiler.demo.hard_cases import HARD_CASES, CaseScore, compile_for, measure_case
-from compiler.demo.matching import score_peaks
 from compiler.hardware import load_profile
 from compiler.lowering.dft_common import sft_rmse
 from ir import Graph, evaluate
@@ -55,6 +53,8 @@ from radar.config import preset
 from radar.loaders import load_openradar, load_ti_chirps
 from radar.scene import SCENE_PRESETS, Target, simulate_frame
 from radar.scene_cases import SCENE_CASES
+from radarsnn.demo.hard_cases import HARD_CASES, CaseScore, compile_for, measure_case
+from radarsnn.demo.matching import score_peaks
 
 TARGETS = ("loihi2", "loihi", "spinnaker2", "unbounded")
 CALIBRATION_SEEDS = (100, 101)
@@ -357,11 +357,11 @@ def _write_markdown(out: Path, argv, seconds: float, lines: list[str], hard_line
            "(docs/accuracy.md);"] if "--auto" in command else []),
         "the dynamic-range scenes use seeds 0-1. Sensitivity and precision are cell-level",
         "against the conventional chain's detections; targets and false objects are",
-        "detection peaks (± 1 bin) against the ground truth (`compiler.demo.matching`).", "",
+        "detection peaks (± 1 bin) against the ground truth (`radarsnn.demo.matching`).", "",
         *(lines + [""] if lines else []),
         "## Hard cases", "",
         f"Scenes of `radar.scene_cases` drawn per seed; calibrated on seeds 100-101, measured on "
-        f"seeds {', '.join(map(str, hard_seeds))} (`compiler.demo.hard_cases`). Targets found "
+        f"seeds {', '.join(map(str, hard_seeds))} (`radarsnn.demo.hard_cases`). Targets found "
         "by each chain on its own; for `chirp_sequence_1d` (target, chirp) pairs.", "",
         *hard_lines, "",
         *(["Placement: " + "; ".join(sorted(BOARDS.values())) + " — a board profile of "

@@ -23,8 +23,8 @@ sys.path.insert(0, str(ROOT / "tests"))  # the bomb builders of the test suite
 
 _CHILD = """
 import json, resource, sys, time
-import numpy, scipy.io, radar.readers, compiler.compile, compiler.cli.arrays
-import compiler.sweep.run
+import numpy, scipy.io, radar.readers, compiler.compile, radarsnn.cli.arrays
+import radarsnn.sweep.run
 call = {call!r}
 pages = int(open("/proc/self/statm").read().split()[0])
 resource.setrlimit(resource.RLIMIT_AS, (pages * resource.getpagesize() + {cap}, -1))
@@ -54,7 +54,7 @@ def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
     (tmp / "aliases.yaml").write_text(f"name: &b {big}\nchains: {{a: c.yaml}}\n"
                                       f"frames: {{source: scene}}\nmode: [{refs}]\n")
     from compiler.compile import EXTRA_OPTIONS
-    from compiler.sweep.spec import NAMED_AXES
+    from radarsnn.sweep.spec import NAMED_AXES
 
     axes = sorted(set(EXTRA_OPTIONS) | set(NAMED_AXES) - {"chain"})[:33]
     (tmp / "c.yaml").write_text(yaml.safe_dump({"name": "c", "nodes": [
@@ -72,7 +72,7 @@ def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
                                    + "".join(f"- {{id: o{k}, op: output, input: x}}\n"
                                              for k in range(27_999)))
     chain = "from ir import Graph; Graph.from_yaml(open({p!r}).read())"
-    load = ("from compiler.cli.arrays import load_arrays; import inspect; load_arrays([{p!r}], "
+    load = ("from radarsnn.cli.arrays import load_arrays; import inspect; load_arrays([{p!r}], "
             "['x'], 'c', **({{'shapes': {{'x': {port}}}}} if 'shapes' in "
             "inspect.signature(load_arrays).parameters else {{}}))")
     return {
@@ -90,10 +90,10 @@ def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
             "from radar.ti_capture import TiBinLayout, read_ti_bin; read_ti_bin("
             f"{str(tmp / 'capture.bin')!r}, TiBinLayout.parse('samples=256,chirps=128,rx=4'))")),
         "sweep, 120 000 aliases of 400 KB": (tmp / "aliases.yaml", (
-            "from compiler.sweep.spec import load_spec; "
+            "from radarsnn.sweep.spec import load_spec; "
             f"load_spec({str(tmp / 'aliases.yaml')!r})")),
         "sweep, 33 axes x 2 values, planned": (tmp / "grid.yaml", (
-            "from compiler.sweep.run import plan_cells; from compiler.sweep.spec import "
+            "from radarsnn.sweep.run import plan_cells; from radarsnn.sweep.spec import "
             f"load_spec; plan_cells(load_spec({str(tmp / 'grid.yaml')!r}))")),
     }
 

@@ -20,7 +20,7 @@ sys.path.insert(0, str(ROOT))
 
 import h5py  # noqa: E402
 
-from compiler.cli import main as radarsnn  # noqa: E402
+from radarsnn.cli import main as radarsnn  # noqa: E402
 
 
 def describe(path: Path) -> list[str]:

@@ -35,8 +35,8 @@ def _cpu_seconds() -> float:
 
 def main(argv: list[str] | None = None) -> None:
     """Run the Fig.-7 sweep once and print its figures and timings."""
-    from compiler.sweep import load_spec, run_sweep
-    from compiler.sweep.results import RESULTS_FILE, read_records
+    from radarsnn.sweep import load_spec, run_sweep
+    from radarsnn.sweep.results import RESULTS_FILE, read_records
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--maps", type=int, default=None, help="override n_frames (default 1000)")

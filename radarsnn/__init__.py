@@ -2,6 +2,10 @@
 
 The project's own packages stay where the design puts them (``ir``, ``compiler``,
 ``backends``, ``radar``); this package gathers what a user needs first under one name.
+It is also the application layer: the ``radarsnn`` command (:mod:`radarsnn.cli`), the
+demo (:mod:`radarsnn.demo`), the sweeps (:mod:`radarsnn.sweep`) and the benchmark
+(:mod:`radarsnn.bench`).  A name is imported from its home module on first use, so the
+command line starts without loading numpy and the compiler.
 
 Examples
 --------
@@ -20,27 +24,50 @@ True
 
 from __future__ import annotations
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
-from backends import load, load_program, save, save_program
-from backends.reference import run_program, simulate
-from backends.reference.accuracy import check_accuracy
-from compiler.program import CompiledProgram
-from ir import Graph, evaluate
 from ir import errors as _errors
 from ir.errors import *  # noqa: F403  (every error class: RadarSNNError and its subclasses)
-from radarsnn._chain import *  # noqa: F403  (every IR op, chains, radar presets, scenes)
-from radarsnn._chain import __all__ as _chain_names
-from radarsnn.compile import compile_graph
 
 try:
     __version__ = version("radarsnn")
 except PackageNotFoundError:  # run from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
-__all__ = [
-    "CompiledProgram", "Graph", "__version__",
-    "check_accuracy", "compile_graph",
-    "evaluate", "load", "load_program", "run_program", "save", "save_program",
-    "simulate", *_errors.__all__, *_chain_names,
-]
+#: The home module of each public name outside :mod:`radarsnn._chain`, imported when the name
+#: is first read; every name of ``radarsnn._chain.__all__`` (the IR ops, example chains, radar
+#: presets and scenes) is read from there.
+HOMES: dict[str, tuple[str, ...]] = {
+    "backends": ("load", "load_program", "save", "save_program"),
+    "backends.reference": ("run_program", "simulate"),
+    "backends.reference.accuracy": ("check_accuracy",),
+    "compiler.program": ("CompiledProgram",),
+    "ir": ("Graph", "evaluate"),
+    "radarsnn.compile": ("compile_graph",),
+}
+_HOME_OF = {name: module for module, names in HOMES.items() for name in names}
+_CHAIN = "radarsnn._chain"
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its home module (PEP 562) and keep it here.
+
+    ``__all__`` too is made on first use: it takes the chain module's names.
+    """
+    if name == "__all__":
+        value = list(dict.fromkeys(["__version__", *_errors.__all__, *_HOME_OF,
+                                    *import_module(_CHAIN).__all__]))
+    elif name in _HOME_OF:
+        value = getattr(import_module(_HOME_OF[name]), name)
+    elif name.startswith("__") or name not in import_module(_CHAIN).__all__:
+        raise AttributeError(f"module 'radarsnn' has no attribute {name!r}")
+    else:
+        value = getattr(import_module(_CHAIN), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__getattr__("__all__")))

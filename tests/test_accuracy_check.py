@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from backends.reference.accuracy import VALUE_RTOL, NodeAccuracy, check_accuracy
-from compiler.cli import main
 from compiler.compile import compile_graph
 from ir import Graph
+from radarsnn.cli import main
 
 TI = Path(__file__).resolve().parents[1] / "examples" / "chains" / "ti_range.yaml"
 

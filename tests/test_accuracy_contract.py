@@ -167,7 +167,7 @@ def test_a_chip_too_small_never_moves_a_stage_to_the_host():
 
 
 def test_the_cli_measures_with_calibration_frames_and_refuses_a_loss(tmp_path, capsys):
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     chain, frames = tmp_path / "rd.yaml", tmp_path / "x.npy"
     chain.write_text(RD.to_yaml())
@@ -225,7 +225,7 @@ def test_a_deadline_refusal_names_the_stage_of_the_slowest_network():
 
 
 def test_the_cli_summary_says_which_stage_the_search_kept_on_the_host(tmp_path, capsys):
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     maps, g = _ca_on_linear_power(3)
     chain, frames = tmp_path / "ca.yaml", tmp_path / "p.npy"

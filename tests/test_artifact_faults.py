@@ -23,9 +23,9 @@ from backends.artifact import read_manifest
 from backends.atomic import stale_temporaries, write_atomic
 from backends.manifest import HASH_KEY
 from backends.program_artifact import read_program_manifest
-from compiler.cli import main
 from compiler.compile import compile_graph
 from ir.errors import ArtifactError
+from radarsnn.cli import main
 
 GRAPH, X = fault_chain("faults")
 

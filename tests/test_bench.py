@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from compiler.bench import BenchReport, run_bench
-from compiler.cli import main
+from radarsnn.bench import BenchReport, run_bench
+from radarsnn.cli import main
 
 
 def test_bench_times_the_closed_form_against_numpy_and_its_floor():
@@ -42,9 +42,9 @@ def test_chain_inputs_refuses_a_chain_larger_than_the_frame():
     import numpy as np
     import pytest
 
-    from compiler.bench import chain_inputs
     from ir import Graph
     from ir.errors import RadarConfigError
+    from radarsnn.bench import chain_inputs
 
     g = Graph.from_dict({"name": "g", "nodes": [
         {"id": "adc", "op": "adc_input", "shape": {"rx": 9, "sample": 4}, "complex": True},

@@ -82,7 +82,7 @@ def test_an_npz_bomb_is_refused_from_its_header_before_it_is_inflated(tmp_path):
     # 4 MB declaring 3.9 GiB (within the 4 GiB cap) that the port (4,) cannot take
     (tmp_path / "bomb.npz").write_bytes(npz_bomb((int(3.9 * (1 << 30)) // 8,)))
     kind, text, seconds = _outcome(
-        "from compiler.cli.arrays import load_arrays",
+        "from radarsnn.cli.arrays import load_arrays",
         f"load_arrays([{str(tmp_path / 'bomb.npz')!r}], ['x'], 'chain c', shapes={{'x': (4,)}})")
     assert kind == "RadarConfigError", (kind, text)
     assert "declares shape (523449139,), but the port takes (4,)" in text
@@ -94,8 +94,8 @@ def test_a_bin_capture_is_checked_against_the_port_before_it_is_read(tmp_path):
     capture = tmp_path / "big.bin"
     with capture.open("wb") as f:
         f.truncate(512 * _MIB)
-    kind, text, seconds = _outcome(
-        "from compiler.cli.arrays import load_arrays",
+    kind, text, seconds = _outcome(  # the readers' imports (scipy) before the cap
+        "import radar.readers, radar.ti_capture\nfrom radarsnn.cli.arrays import load_arrays",
         f"load_arrays([{str(capture)!r}], ['adc'], 'chain c', "
         "bin_layout='samples=256,chirps=128,rx=4', shapes={'adc': (4, 64, 256)})",
         headroom_bytes=256 * _MIB)

@@ -14,11 +14,11 @@ import pytest
 from backends.reference import run_program
 from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
-from compiler.demo.matching import score_peaks
 from compiler.quantize_weights import rint_feedback, rint_keep_sums
 from ir import Graph, evaluate
 from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frame
+from radarsnn.demo.matching import score_peaks
 
 
 def _rd(values: dict, graph: Graph, node: str) -> np.ndarray:

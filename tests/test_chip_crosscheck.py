@@ -156,7 +156,7 @@ def test_cli_crosscheck_saved_network(tmp_path, capsys) -> None:
     import json
 
     from backends import save
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     net, maps = _cfar("os")
     folder = save(net, tmp_path / "net")

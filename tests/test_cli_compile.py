@@ -12,9 +12,9 @@ import pytest
 from backends import load, save
 from backends.reference import RunOptions, run_program
 from compiler import compile_graph
-from compiler.cli import main
 from ir import Graph
 from ir.errors import ArtifactError
+from radarsnn.cli import main
 
 CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
 TI = CHAINS / "ti_range.yaml"
@@ -206,8 +206,8 @@ def test_deeply_nested_json_fields_of_a_program_are_refused(compiled, tmp_path, 
 
 
 def test_npy_inputs_declaring_more_than_the_limit_are_refused_unread(tmp_path):
-    from compiler.cli.chain import load_arrays
     from ir.errors import RadarSNNError
+    from radarsnn.cli.chain import load_arrays
 
     header = repr({"descr": "<f8", "fortran_order": False, "shape": ((1 << 29) + 1,)}).encode()
     header += b" " * (63 - (len(header) + 10) % 64) + b"\n"

@@ -1,4 +1,4 @@
-"""``radarsnn export-nir`` (compiler.cli.export_nir): chain files, compiled folders, network
+"""``radarsnn export-nir`` (radarsnn.cli.export_nir): chain files, compiled folders, network
 artifacts, the export report beside the file, one-line errors, and the missing extra."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from compiler.cli import build_parser, main
+from radarsnn.cli import build_parser, main
 
 CHAIN = """name: tiny-range-cfar
 nodes:

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from compiler.cli import main
-from compiler.cli.arrays import load_arrays
 from ir.errors import RadarSNNError
+from radarsnn.cli import main
+from radarsnn.cli.arrays import load_arrays
 
 CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
 BAD_CHAIN = ("name: x\nnodes:\n  - {id: a, op: input, shape: {range: 8}}\n"
@@ -150,7 +150,7 @@ def test_every_argument_of_every_command_has_help_text():
     """``radarsnn COMMAND --help`` explains every positional and option (``run --mode`` did not)."""
     import argparse
 
-    from compiler.cli import build_parser
+    from radarsnn.cli import build_parser
 
     parser = build_parser()
     (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
@@ -188,10 +188,10 @@ def test_version_imports_no_command_module():
     import subprocess
     import sys
 
-    code = ("import sys\nfrom compiler.cli import main\ntry:\n    main(['--version'])\n"
+    code = ("import sys\nfrom radarsnn.cli import main\ntry:\n    main(['--version'])\n"
             "except SystemExit as e:\n    assert e.code == 0\n"
             "print(sorted(m for m in ('numpy', 'scipy', 'pydantic', 'yaml', 'matplotlib', "
-            "'compiler.cli.chain') if m in sys.modules))")
+            "'radarsnn.cli.chain') if m in sys.modules))")
     root = Path(__file__).resolve().parents[1]
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=root, env={**__import__("os").environ, "PYTHONPATH": str(root)},
@@ -203,12 +203,13 @@ def test_version_imports_no_command_module():
 def test_each_command_is_added_by_the_module_main_imports_for_it():
     import argparse
 
-    from compiler.cli import COMMAND_MODULES, COMMAND_OF, build_parser
+    from radarsnn.cli import COMMANDS, build_parser
 
     def commands(parser):
         (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-        return set(sub.choices)
+        return list(sub.choices)
 
-    assert commands(build_parser()) == set(COMMAND_OF)
-    for name, module in COMMAND_OF.items():
-        assert module in COMMAND_MODULES and name in commands(build_parser([module]))
+    assert commands(build_parser()) == list(COMMANDS)  # every command, in the table's order
+    for name, load in COMMANDS.items():
+        assert name in commands(build_parser([load()]))
+        assert load().__name__.startswith("radarsnn.cli.")

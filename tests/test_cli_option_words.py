@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from compiler.cli.chain import parse_options
 from compiler.option_checks import check_options
+from radarsnn.cli.compiling import parse_options
 
 
 @pytest.mark.parametrize("word", ["off", "Off", "on", "yes", "no", "y", "n"])

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warnings
 
-from compiler.cli import main
+from radarsnn.cli import main
 
 CHAIN = ("name: res\nnodes:\n  - {id: x, op: input, shape: {chirp: 2, sample: 64}}\n"
          "  - {id: f, op: dft, input: x, axis: sample, keep: positive}\n"

@@ -28,7 +28,6 @@ from pydantic import Field
 
 from backends import load_program, save_program
 from backends.reference import run_program, simulate
-from compiler.cli import main
 from compiler.compile import compile_graph
 from compiler.lowering import SpikeValue, default_registry
 from compiler.passes import CompileContext
@@ -47,6 +46,7 @@ from ir import (
     evaluate,
 )
 from ir.errors import SimulationError
+from radarsnn.cli import main
 
 N = 8  # samples of the range DFT
 

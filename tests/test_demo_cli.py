@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from compiler.chains import range_doppler_chain
-from compiler.cli import main
-from compiler.demo import run_demo
 from ir.errors import RadarSNNError
 from radar.config import preset
+from radarsnn.cli import main
+from radarsnn.demo import run_demo
 
 CHAINS = Path(__file__).resolve().parents[1] / "examples" / "chains"
 

@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from compiler.cli import build_parser
-from compiler.demo import DEFAULT_TARGET, DemoReport, SceneReport, run_demo
+from radarsnn.cli import build_parser
+from radarsnn.demo import DEFAULT_TARGET, DemoReport, SceneReport, run_demo
 
 
 @pytest.fixture(scope="module")

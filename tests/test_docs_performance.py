@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from compiler.bench import BenchReport
+from radarsnn.bench import BenchReport
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "performance.md"

@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 
 from backends.artifact import save
-from backends.emit.command import add_parsers, run_emit
 from backends.emit.run_package import run_package
 from backends.reference import run_program, simulate
 from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
 from radar.config import RadarConfig, preset
 from radar.scene import SCENE_PRESETS, simulate_frame
+from radarsnn.cli.emit import add_parsers, run_emit
 
 
 def test_carrada_chain_matches_the_reference_step_for_step(tmp_path):

@@ -26,20 +26,20 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
-from compiler.demo.figures import (  # noqa: E402
+from compiler.report import Report  # noqa: E402
+from compiler.report.core_map import core_map_figure  # noqa: E402
+from radar.config import preset  # noqa: E402
+from radarsnn.demo.figures import (  # noqa: E402
     CHAIN_COLOURS,
     MARKERS,
     MARKERS_ALIASED,
     rd_figure,
     shown_range_bins,
 )
-from compiler.demo.rasters import spike_figure  # noqa: E402
-from compiler.demo.scenes import run_scene  # noqa: E402
-from compiler.report import Report  # noqa: E402
-from compiler.report.core_map import core_map_figure  # noqa: E402
-from compiler.sweep.figures import _pareto, pick_cost  # noqa: E402
-from compiler.sweep.spec import FigureSpec  # noqa: E402
-from radar.config import preset  # noqa: E402
+from radarsnn.demo.rasters import spike_figure  # noqa: E402
+from radarsnn.demo.scenes import run_scene  # noqa: E402
+from radarsnn.sweep.figures import _pareto, pick_cost  # noqa: E402
+from radarsnn.sweep.sections import FigureSpec  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -80,7 +80,7 @@ def test_empty_mixed_and_misshapen_frames_are_refused():
 
 def test_radarsnn_run_reads_a_frames_axis(tmp_path, capsys):
     from backends import save
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     g = _range_chain()
     x = RNG.normal(size=(4, 16))

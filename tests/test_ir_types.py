@@ -68,8 +68,8 @@ def test_types_are_frozen() -> None:
 
 
 def test_more_axes_than_max_axes_are_refused_by_verify_not_by_numpy(tmp_path):
-    from compiler.cli import main
     from ir import Graph
+    from radarsnn.cli import main
 
     def chain(n: int) -> Graph:
         return Graph.from_dict({"nodes": [

@@ -16,7 +16,6 @@ from backends import save
 from backends.reference import RunOptions, run_program, simulate
 from backends.reference.encoding import encode_inputs
 from backends.reference.input_range import OutOfRangeWarning, out_of_range
-from compiler.cli import main
 from compiler.compile import compile_graph
 from compiler.snn import (
     Decoder,
@@ -30,6 +29,7 @@ from compiler.snn import (
 )
 from ir import Graph
 from ir.errors import IRError, SimulationError
+from radarsnn.cli import main
 
 
 def one_layer_net(code, split: str = "none", decoder: str = "spike_time") -> SpikingNetwork:

@@ -17,10 +17,10 @@ import pytest
 from backends.reference import run_program
 from compiler import compile_graph
 from compiler.chains import capture_chain
-from compiler.demo.matching import score_peaks
 from compiler.lowering.dft_common import modulus_rmse
 from ir import Graph, evaluate
 from radar.loaders import load_openradar, load_ti_chirps
+from radarsnn.demo.matching import score_peaks
 
 ROOT = Path(__file__).resolve().parents[1]
 

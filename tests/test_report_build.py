@@ -7,7 +7,6 @@ from pathlib import Path
 
 import pytest
 
-from compiler.cli import main
 from compiler.hardware import load_profile
 from compiler.hardware.reference_networks import dft_network, imaging_network, os_cfar_network
 from compiler.passes.base import CompileContext, run_pipeline
@@ -19,6 +18,7 @@ from compiler.program import CompiledProgram, Segment
 from compiler.report import build_report, network_runs
 from ir import Graph
 from ir.errors import BudgetError
+from radarsnn.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 CARRADA = ROOT / "examples" / "chains" / "carrada_rd_oscfar.yaml"

@@ -1,4 +1,4 @@
-"""What a report depends on without ``-c`` (docs/cli.md, *Calibration*; compiler.cli.notes).
+"""What a report depends on without ``-c`` (docs/cli.md, *Calibration*; radarsnn.cli.notes).
 
 Calibrated on synthetic noise, a spiking OS-CFAR on a range-Doppler power map gets a
 narrow log-code range, hence a CUT delay beyond loihi2's 63 steps, relayed through
@@ -13,7 +13,7 @@ import json
 import numpy as np
 import pytest
 
-from compiler.cli import main
+from radarsnn.cli import main
 
 CHAIN = """name: small-rd-oscfar
 nodes:

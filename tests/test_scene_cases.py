@@ -15,12 +15,12 @@ from hypothesis import strategies as st
 
 from compiler.accuracy.contract import firm_detections
 from compiler.chains import range_cfar_chain
-from compiler.demo.hard_cases import measure_case
-from compiler.demo.matching import score_range_peaks
 from ir import evaluate
 from ir.errors import RadarConfigError
 from radar.scene import Scene, chirp_range_bins, simulate_frame
 from radar.scene_cases import SCENE_CASES, cell_snr_db
+from radarsnn.demo.hard_cases import measure_case
+from radarsnn.demo.matching import score_range_peaks
 
 
 def spectrum(x: np.ndarray, pad: int = 1) -> np.ndarray:

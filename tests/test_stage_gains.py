@@ -21,7 +21,6 @@ from compiler import compile_graph
 from compiler.calibration import measure
 from compiler.chains import range_doppler_chain
 from compiler.compile import lower_pass
-from compiler.demo.matching import detection_peaks, score_peaks
 from compiler.lowering import default_registry
 from compiler.lowering.dft_common import real_weights
 from compiler.lowering.stage_gains import exact_weight_bits, index_levels
@@ -35,6 +34,7 @@ from ir.errors import CompileError, NetworkError
 from radar.config import preset
 from radar.dsp import dft_matrix
 from radar.scene import SCENE_PRESETS, simulate_frame
+from radarsnn.demo.matching import detection_peaks, score_peaks
 
 N_CHIRPS, N_SAMPLES = 8, 64
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from compiler.sweep.frames import folder_files, frame_rng, load_frames, random_scene
-from compiler.sweep.spec import FolderFrames, SceneFrames
 from ir.errors import RadarConfigError
+from radarsnn.sweep.frames import folder_files, frame_rng, load_frames, random_scene
+from radarsnn.sweep.sections import FolderFrames, SceneFrames
 
 
 def test_scene_frame_does_not_depend_on_its_slice_and_streams_differ():
@@ -72,8 +72,8 @@ def test_hostile_folder_sources_are_typed_errors(tmp_path):
         np.save(tmp_path / f"f{i}.npy", np.zeros(2))
     os.mkfifo(tmp_path / "f3.npy")  # a reader opening it would wait for a writer forever
     done = run_capped(
-        "from compiler.sweep.frames import folder_files\n"
-        "from compiler.sweep.spec import FolderFrames\nfrom ir.errors import RadarConfigError",
+        "from radarsnn.sweep.frames import folder_files\n"
+        "from radarsnn.sweep.sections import FolderFrames\nfrom ir.errors import RadarConfigError",
         f"""
         try:
             folder_files(FolderFrames(source="folder", path="."), {str(tmp_path)!r})
@@ -101,8 +101,8 @@ def test_hostile_folder_sources_are_typed_errors(tmp_path):
     ("a/../../*", "climbs out"), ("**/*.npy", "is recursive"), ("x\0.npy", "NUL byte"),
     ("C:*.npy", "is absolute"), (".", "names no file"), ("./", "names no file")])
 def test_folder_patterns_are_relative_bounded_globs(pattern, why):
-    from compiler.sweep.spec import parse_spec
     from ir.errors import CompileError
+    from radarsnn.sweep.spec import parse_spec
 
     spec = {"name": "t", "chains": {"a": {"name": "c", "nodes": [
         {"id": "x", "op": "input", "shape": {"range": 2}}, {"id": "o", "op": "output",

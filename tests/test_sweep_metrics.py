@@ -9,9 +9,11 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from compiler.lowering.dft_common import sft_rmse
-from compiler.sweep.cost import finalize_cost
-from compiler.sweep.figures import draw_figures, pareto_front
-from compiler.sweep.metrics import (
+from ir.errors import CompileError, SimulationError
+from radar.scene import TargetTruth
+from radarsnn.sweep.cost import finalize_cost
+from radarsnn.sweep.figures import draw_figures, pareto_front
+from radarsnn.sweep.metrics import (
     FrameData,
     Metric,
     MetricRegistry,
@@ -19,9 +21,7 @@ from compiler.sweep.metrics import (
     detection_counts,
     sensitivity_precision,
 )
-from compiler.sweep.spec import FigureSpec
-from ir.errors import CompileError, SimulationError
-from radar.scene import TargetTruth
+from radarsnn.sweep.sections import FigureSpec
 
 REG = default_metrics()
 

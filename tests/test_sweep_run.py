@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 import yaml
 
-from compiler.sweep import run_sweep
-from compiler.sweep.command import add_parsers
-from compiler.sweep.results import RESULTS_FILE, read_records
-from compiler.sweep.run import plan_cells
-from compiler.sweep.spec import parse_spec
 from ir.errors import CompileError, IRError, RadarConfigError
+from radarsnn.cli.sweep import add_parsers
+from radarsnn.sweep import run_sweep
+from radarsnn.sweep.results import RESULTS_FILE, read_records
+from radarsnn.sweep.run import plan_cells
+from radarsnn.sweep.spec import parse_spec
 
 CHAIN = {"name": "tiny-os", "nodes": [
     {"id": "rd", "op": "input", "shape": {"range": 16, "doppler": 8}, "domain": "db"},

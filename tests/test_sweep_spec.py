@@ -9,8 +9,9 @@ import yaml
 from hypothesis import given
 from hypothesis import strategies as st
 
-from compiler.sweep.spec import SweepSpec, cell_key, load_spec, parse_spec
 from ir.errors import CompileError
+from radarsnn.sweep.cells import cell_key
+from radarsnn.sweep.spec import SweepSpec, load_spec, parse_spec
 
 CHAIN = {"name": "c", "nodes": [
     {"id": "x", "op": "input", "shape": {"range": 16, "doppler": 8}},
@@ -119,7 +120,7 @@ def test_hostile_sweep_files_are_compile_errors(tmp_path):
 
 def _axes(n):
     from compiler.compile import EXTRA_OPTIONS
-    from compiler.sweep.spec import NAMED_AXES
+    from radarsnn.sweep.spec import NAMED_AXES
 
     return sorted(set(EXTRA_OPTIONS) | set(NAMED_AXES) - {"chain"})[:n]
 
@@ -168,7 +169,7 @@ def test_alias_bombs_in_a_sweep_file_are_refused_unexpanded(tmp_path):
                 out.append([str(err)[:300], time.perf_counter() - start])
         print(json.dumps(out))
         """.replace("PATHS", repr([str(tmp_path / n) for n in cases]))
-    done = run_capped("from compiler.sweep.spec import load_spec\n"
+    done = run_capped("from radarsnn.sweep.spec import load_spec\n"
                       "from ir.errors import CompileError", body, timeout_s=60)
     assert done.returncode == 0, done.stderr[-2000:]
     for text, seconds in json.loads(done.stdout):
@@ -177,7 +178,7 @@ def test_alias_bombs_in_a_sweep_file_are_refused_unexpanded(tmp_path):
 
 
 def test_expanded_bytes_stops_on_cycles_and_counts_keys():
-    from compiler.sweep.spec import expanded_bytes
+    from radarsnn.sweep.spec import expanded_bytes
 
     loop: list = []
     loop.append(loop)
@@ -193,7 +194,7 @@ def test_expanded_bytes_stops_on_cycles_and_counts_keys():
                                                                  max_size=3),
     max_leaves=6), min_size=1, max_size=4), split=st.integers(0, 4))
 def test_cell_keys_built_part_by_part_equal_the_whole(parts, split):
-    from compiler.sweep.spec import Canonical, CellKey
+    from radarsnn.sweep.cells import Canonical, CellKey
 
     head, tail = parts[:split], parts[split:]
     assert CellKey(*head).then(*tail).hex() == cell_key(*parts)

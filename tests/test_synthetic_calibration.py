@@ -11,11 +11,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from backends.emit.command import run_emit
 from compiler.calibration import SYNTHETIC, synthetic_inputs
-from compiler.cli import main
 from ir import Graph, evaluate
 from ir.errors import CompileError
+from radarsnn.cli import main
+from radarsnn.cli.emit import run_emit
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

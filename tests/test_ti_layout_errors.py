@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from compiler.cli.arrays import load_arrays
 from ir.errors import RadarConfigError
 from radar.ti_capture import TiBinLayout, read_ti_bin
+from radarsnn.cli.arrays import load_arrays
 
 
 @pytest.mark.parametrize("words", [2, 4])  # one sample (4 bytes); "two frames" (8 bytes)

@@ -21,9 +21,9 @@ from faults import device_node, fault_chain, kill_while_saving, listing, tree_by
 
 from backends import save_program
 from backends.emit import emit_numpy
-from compiler.cli import main
 from compiler.compile import compile_graph
 from ir.errors import ArtifactError, CompileError
+from radarsnn.cli import main
 
 GRAPH, X = fault_chain("owner")
 
@@ -165,8 +165,9 @@ def test_output_paths_that_are_no_file_are_refused_in_one_line(files, tmp_path, 
 
 
 def test_sweep_figure_names_must_be_plain_file_names(tmp_path):
-    from compiler.sweep.figures import draw_figures
-    from compiler.sweep.spec import FigureSpec, parse_spec
+    from radarsnn.sweep.figures import draw_figures
+    from radarsnn.sweep.sections import FigureSpec
+    from radarsnn.sweep.spec import parse_spec
 
     base = {"name": "s", "chains": {"c": "c.yaml"},
             "frames": {"source": "scene", "n_frames": 1, "frames_per_cell": 1}}

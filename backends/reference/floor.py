@@ -31,7 +31,7 @@ Examples
 ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
 >>> [(p.id, p.shape) for p in floor_products([build_plan(net)])]
 [('w', (3, 2, 4))]
->>> sorted(floor_calls(floor_products([build_plan(net)])))  # time them with compiler.bench
+>>> sorted(floor_calls(floor_products([build_plan(net)])))  # time them with radarsnn.bench
 ['floor', 'floor_core']
 """
 

@@ -21,9 +21,9 @@ from hypothesis import given, note
 from hypothesis import strategies as st
 
 from backends import save
-from compiler.cli import main
 from compiler.compile import compile_graph
 from ir import Graph
+from radarsnn.cli import main
 
 TINY = """name: tiny
 nodes:

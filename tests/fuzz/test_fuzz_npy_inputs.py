@@ -20,7 +20,6 @@ from hypothesis.extra import numpy as hnp
 
 from backends.reference import run_program, simulate
 from backends.reference.input_range import OutOfRangeWarning
-from compiler.cli.chain import load_arrays
 from compiler.compile import compile_graph
 from compiler.snn import (
     Decoder,
@@ -32,6 +31,7 @@ from compiler.snn import (
     SpikingNetwork,
 )
 from ir import Graph
+from radarsnn.cli.chain import load_arrays
 
 NET = SpikingNetwork(
     name="npy-net", n_steps=10,

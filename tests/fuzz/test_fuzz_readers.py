@@ -64,7 +64,7 @@ def _cases(tmp) -> dict[str, tuple[str, str]]:
     for i in range(2):
         np.save(tmp / "frames" / f"f{i}.npy", np.zeros(4))
     (tmp / "frames" / "f2.npy").write_bytes(npy_header((10**12,)) + bytes(16))
-    arrays = ("from compiler.cli.arrays import load_arrays; "
+    arrays = ("from radarsnn.cli.arrays import load_arrays; "
               "load_arrays([{p!r}], ['x'], 'chain c', shapes={{'x': {port}}})")
     return {
         "npz input": (arrays.format(p=str(tmp / "in.npz"), port=(4,)),
@@ -82,7 +82,7 @@ def _cases(tmp) -> dict[str, tuple[str, str]]:
         "mat v4 header": (arrays.format(p=str(tmp / "v4.mat"), port=(16_000, 16_000)),
                           "but the file holds 30"),
         "npy input": (arrays.format(p=str(tmp / "in.npy"), port=(4,)), "over the limit"),
-        "bin capture": ("from compiler.cli.arrays import load_arrays; load_arrays("
+        "bin capture": ("from radarsnn.cli.arrays import load_arrays; load_arrays("
                         f"[{str(tmp / 'big.bin')!r}], ['x'], 'c', bin_layout='samples=256,"
                         "chirps=128,rx=4', shapes={'x': (4, 64, 256)})", "but the port takes"),
         "artifact arrays.npz": ("from pathlib import Path; from backends.npz_reader import "
@@ -92,8 +92,8 @@ def _cases(tmp) -> dict[str, tuple[str, str]]:
                                "from ir.ops.classify import Classifier; load_weights(Classifier."
                                f"model_construct(weights={str(tmp / 'in.npz')!r}), (16, 16), "
                                "'cls')", "over the limit"),
-        "folder frame": ("from compiler.sweep.frames import load_frames; from compiler.sweep."
-                         "spec import FolderFrames; load_frames(FolderFrames(source='folder', "
+        "folder frame": ("from radarsnn.sweep.frames import load_frames; from radarsnn.sweep."
+                         "sections import FolderFrames; load_frames(FolderFrames(source='folder', "
                          f"path='frames'), {str(tmp)!r}, 0, 1, calibration=True)",
                          "over the limit"),
     }
@@ -116,7 +116,7 @@ def test_every_reader_refuses_a_small_bomb_quickly_in_bounded_memory(tmp_path):
                 out[name] = [type(err).__name__, str(err)[:300], time.perf_counter() - start]
         print(json.dumps(out))
         """.replace("CASES", repr(json.dumps({k: c for k, (c, _) in cases.items()})))
-    done = run_capped("import numpy, scipy.io, compiler.cli.arrays, compiler.sweep.frames, "
+    done = run_capped("import numpy, scipy.io, radarsnn.cli.arrays, radarsnn.sweep.frames, "
                       "backends.npz_reader", body, headroom_bytes=_GIB, timeout_s=120)
     assert done.returncode == 0, done.stderr[-3000:]
     results = json.loads(done.stdout.splitlines()[-1])
@@ -147,7 +147,7 @@ def test_bombs_of_any_size_cost_what_the_port_takes(tmp_path_factory, declared, 
     import scipy.io  # noqa: F401 - imported before the clock starts, as radar is below
 
     import radar.readers  # noqa: F401
-    from compiler.cli.arrays import load_arrays
+    from radarsnn.cli.arrays import load_arrays
 
     tmp = tmp_path_factory.mktemp("bomb")
     path = tmp / f"x.{kind.partition('-')[0]}"
@@ -167,7 +167,7 @@ def test_bombs_of_any_size_cost_what_the_port_takes(tmp_path_factory, declared, 
 
 def _axes():
     from compiler.compile import EXTRA_OPTIONS
-    from compiler.sweep.spec import NAMED_AXES
+    from radarsnn.sweep.spec import NAMED_AXES
 
     return sorted(set(EXTRA_OPTIONS) | set(NAMED_AXES) - {"chain"})
 
@@ -183,7 +183,7 @@ _CHAIN = {"name": "c", "nodes": [{"id": "x", "op": "input", "shape": {"range": 4
 @budget(0.2)
 def test_grids_and_aliases_are_refused_or_planned_in_bounded_time(lengths, n_frames,
                                                                   per_cell, fan, big):
-    from compiler.sweep.spec import MAX_SWEEP_CELLS, MAX_SWEEP_POINTS, parse_spec
+    from radarsnn.sweep.spec import MAX_SWEEP_CELLS, MAX_SWEEP_POINTS, parse_spec
 
     shared = "v" * big  # one object referred to `fan` times: what YAML aliases build
     grid = {a: list(range(n)) for a, n in zip(_axes(), lengths, strict=False)}
@@ -243,8 +243,8 @@ def _write(folder, name: str, kind: str) -> None:
 @budget(0.2)
 def test_hostile_folder_sources_are_typed_errors(tmp_path_factory, pattern, kinds,
                                                  calibration, labels):
-    from compiler.sweep.frames import folder_files, load_frames
-    from compiler.sweep.spec import parse_spec
+    from radarsnn.sweep.frames import folder_files, load_frames
+    from radarsnn.sweep.spec import parse_spec
 
     tmp = tmp_path_factory.mktemp("frames")
     for i, kind in enumerate(kinds):

@@ -153,7 +153,7 @@ def run_files(tmp_path_factory):
        st.booleans(), st.sampled_from(["out.npz", "out", "sub/out.npz"]))
 def test_run_outputs_on_a_full_disk_are_complete_or_absent(tmp_path, run_files, fraction, code,
                                                            previous, name) -> None:
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     art, x = run_files
     root = Path(tempfile.mkdtemp(dir=tmp_path))

@@ -27,8 +27,8 @@ from hypothesis import example, given, note
 from hypothesis import strategies as st
 
 from backends import save_program
-from compiler.cli import main
 from compiler.compile import compile_graph
+from radarsnn.cli import main
 
 GRAPH, X = fault_chain("fuzz-writers")
 MAPS = {"name": "tiny-os", "nodes": [

@@ -10,8 +10,8 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from compiler.demo import PRESETS, run_demo
     from compiler.progress import make_progress
+    from radarsnn.demo import PRESETS, run_demo
 
     presets = args.preset or list(PRESETS)
     spiking = not args.conventional_only
@@ -32,8 +32,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from compiler.bench import run_bench
     from compiler.progress import make_progress
+    from radarsnn.bench import run_bench
 
     progress = make_progress(args.quiet or args.json, desc="bench")
     try:

@@ -1,6 +1,6 @@
 """The ``run`` sub-command: simulate a compiled program or network artifact on inputs.
 
-Inputs are read by :mod:`compiler.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
+Inputs are read by :mod:`radarsnn.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
 ``.bin``); one with a leading frames axis runs frame after frame with a progress
 bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are refused by
 default (one ``error:`` line naming the count and ``--clip``); ``--clip`` clips them
@@ -15,8 +15,8 @@ import os
 import sys
 from pathlib import Path
 
-from compiler.cli.arrays import INPUT_FORMS, bin_layout_argument, load_arrays
-from compiler.cli.chain import write_output
+from radarsnn.cli.arrays import INPUT_FORMS, bin_layout_argument, load_arrays
+from radarsnn.cli.chain import write_output
 
 __all__ = ["add_parsers", "clipped_warning"]
 

@@ -1,5 +1,5 @@
 """The demo's figures (matplotlib, Agg): RD maps with detections (spike rasters:
-:mod:`compiler.demo.rasters`; core maps: :mod:`compiler.report.core_map`).
+:mod:`radarsnn.demo.rasters`; core maps: :mod:`compiler.report.core_map`).
 
 ``rd_maps`` draws the conventional and the spiking range-Doppler map side by
 side in physical units (range in m, radial velocity in m/s, from the radar
@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from compiler.cli.chain import write_output
-from compiler.demo.matching import detection_peaks, match_peak
+from radarsnn.cli.chain import write_output
+from radarsnn.demo.matching import detection_peaks, match_peak
 
 __all__ = ["CELL_MARKERS", "CHAIN_COLOURS", "MARKERS", "MARKERS_ALIASED", "detection_cells",
            "rd_figure", "rd_maps", "shown_range_bins"]
@@ -154,7 +154,7 @@ def rd_figure(title: str, arrays, config, *, span_db: tuple[float, float] = SPAN
     ----------
     title : str
         Scene name, the start of the figure's title.
-    arrays : compiler.demo.scenes.SceneArrays
+    arrays : radarsnn.demo.scenes.SceneArrays
         Maps in dB (``[range, doppler]``, Doppler fftshifted), detection masks, truth bins
         (and their true velocities and aliasing, when known).
     config : radar.config.RadarConfig

@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from compiler.cli.chain import write_output
-from compiler.sweep.spec import FigureSpec
 from ir.errors import CompileError
+from radarsnn.cli.chain import write_output
+from radarsnn.sweep.sections import FigureSpec
 
 __all__ = ["pareto_front", "pick_cost", "draw_figures", "MAIN_FIELD"]
 
@@ -200,7 +200,7 @@ def draw_figures(figures: list[FigureSpec], rows: list[dict], out_dir: str | Pat
     figures : list of FigureSpec
         The spec's ``figures``.
     rows : list of dict
-        :func:`compiler.sweep.results.summarize` rows (incomplete or failed rows skipped).
+        :func:`radarsnn.sweep.results.summarize` rows (incomplete or failed rows skipped).
     out_dir : str or Path
         Folder of the PNG files (created), one ``<name or kind>.png`` per figure, each
         written atomically (whole, or the previous one kept).

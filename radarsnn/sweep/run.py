@@ -10,7 +10,7 @@ are appended as they finish, so a killed run loses only the cells in flight.
 thread), ``"sync"`` runs every task in this process in spec order (tests,
 debugging), anything else is the address of a running Dask scheduler.
 Results do not depend on the choice: every random draw is seeded from the
-frame index or the cell id (see :mod:`compiler.sweep.frames`).
+frame index or the cell id (see :mod:`radarsnn.sweep.frames`).
 
 Examples
 --------
@@ -30,19 +30,20 @@ from pathlib import Path
 from typing import Any
 
 from backends.atomic import check_output
-from compiler.sweep.executors import DaskExecutor, SyncExecutor
-from compiler.sweep.frames import folder_files, load_frames
-from compiler.sweep.metrics import NODE_OPS, MetricRegistry, default_metrics
-from compiler.sweep.results import (
+from ir.errors import CompileError
+from radarsnn.sweep.cells import Canonical, CellKey, cell_key
+from radarsnn.sweep.executors import DaskExecutor, SyncExecutor
+from radarsnn.sweep.frames import folder_files, load_frames
+from radarsnn.sweep.metrics import NODE_OPS, MetricRegistry, default_metrics
+from radarsnn.sweep.results import (
     RESULTS_FILE,
     append_record,
     read_records,
     summarize,
     write_summary,
 )
-from compiler.sweep.spec import Canonical, CellKey, SweepSpec, cell_key, load_spec
-from compiler.sweep.tasks import CellTask, compile_point, evaluate_cell, reference_values
-from ir.errors import CompileError
+from radarsnn.sweep.spec import SweepSpec, load_spec
+from radarsnn.sweep.tasks import CellTask, compile_point, evaluate_cell, reference_values
 
 __all__ = ["SweepResult", "run_sweep", "plan_cells"]
 
@@ -188,7 +189,7 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
     Parameters
     ----------
     spec : SweepSpec or path
-        The sweep (a path is read with :func:`~compiler.sweep.spec.load_spec`).
+        The sweep (a path is read with :func:`~radarsnn.sweep.spec.load_spec`).
     out_dir : str or Path
         Output folder (created); its ``results.jsonl`` is read first and skipped cells
         are not recomputed.
@@ -201,7 +202,7 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
     quiet : bool
         No progress bar.
     metrics : MetricRegistry, optional
-        Metric implementations (default :func:`~compiler.sweep.metrics.default_metrics`).
+        Metric implementations (default :func:`~radarsnn.sweep.metrics.default_metrics`).
     max_cells : int, optional
         Stop after this many new cells (the rest stays for the next run).
     figures : bool
@@ -260,7 +261,7 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, *, scheduler: s
     write_summary(rows, out)
     drawn: list[Path] = []
     if figures and spec.figures:
-        from compiler.sweep.figures import draw_figures
+        from radarsnn.sweep.figures import draw_figures
 
         drawn = draw_figures(spec.figures, rows, out / "figures",
                              {m.key: m.name for m in spec.metrics})

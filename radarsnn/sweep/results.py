@@ -26,9 +26,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from compiler.cli.chain import write_output
-from compiler.sweep.cost import finalize_cost
 from ir.errors import ArtifactError
+from radarsnn.cli.chain import write_output
+from radarsnn.sweep.cost import finalize_cost
 
 __all__ = ["RESULTS_FILE", "append_record", "read_records", "summarize", "write_summary"]
 

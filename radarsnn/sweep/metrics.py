@@ -105,7 +105,7 @@ class Metric:
 
 
 class MetricRegistry:
-    """Metrics by name; pass one to :func:`compiler.sweep.run.run_sweep`.
+    """Metrics by name; pass one to :func:`radarsnn.sweep.run.run_sweep`.
 
     Examples
     --------

@@ -13,8 +13,8 @@ import argparse
 from pathlib import Path
 
 from backends.emit import EMITTERS
-from compiler.cli.chain import compile_chain
 from ir.errors import CompileError
+from radarsnn.cli.compiling import compile_chain
 
 __all__ = ["add_parsers", "run_emit"]
 

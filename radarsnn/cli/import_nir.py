@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from compiler.cli.export_nir import _require_nir
+from radarsnn.cli.export_nir import _require_nir
 
 __all__ = ["add_parsers", "import_nir_file"]
 

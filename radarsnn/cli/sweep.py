@@ -12,7 +12,7 @@ import argparse
 import json
 from pathlib import Path
 
-from compiler.sweep.run import SweepResult, run_sweep
+from radarsnn.sweep.run import SweepResult, run_sweep
 
 __all__ = ["add_parsers", "add_parser", "run_command", "format_rows"]
 

@@ -83,8 +83,8 @@ def export_nir(args: argparse.Namespace):
     from backends import is_program, load
     from backends.atomic import check_output
     from backends.nir import export_network, export_program, write_nir
-    from compiler.cli.chain import _compile  # the compile of `radarsnn compile`/`report`
-    from compiler.cli.notes import artifact_note
+    from radarsnn.cli.compiling import compile_from_args  # as `radarsnn compile`/`report`
+    from radarsnn.cli.notes import artifact_note
 
     path = check_output(args.output)  # before any work: a device, a folder, a NUL byte
     check_output(path.with_suffix(".report.json"))
@@ -111,7 +111,7 @@ def export_nir(args: argparse.Namespace):
                                            dt_s=args.dt_s or _profile_step_s(loaded.target))
             note = artifact_note(source)
     else:
-        program, note = _compile(args, args.target or "loihi2")
+        program, note = compile_from_args(args, args.target or "loihi2")
         graph, report = export_program(program, stages=args.stage,
                                        dt_s=args.dt_s or _profile_step_s(program.target))
     write_nir(graph, report, path)

@@ -143,6 +143,6 @@ def spike_figure(title: str, first_spikes: dict[str, np.ndarray],
 def spike_times(path: Path, title: str, first_spikes: dict[str, np.ndarray],
                 shapes: dict[str, dict[str, int]] | None = None, **options) -> Path:
     """Write :func:`spike_figure` as a PNG at ``path`` atomically; return ``path``."""
-    from compiler.demo.figures import write_png
+    from radarsnn.demo.figures import write_png
 
     return write_png(path, spike_figure(title, first_spikes, shapes, **options))

@@ -8,9 +8,9 @@ motifs chosen to keep the accuracy contract and the frame deadline — on the
 reference simulator, and reports the per-stage accuracy lines of the compile, the
 detections of both against the ground truth, the spiking detections against the
 conventional ones, the S-FT RMSE and the resource report
-(:mod:`compiler.demo.scenes`); a target on which no configuration holds or fits
+(:mod:`radarsnn.demo.scenes`); a target on which no configuration holds or fits
 (carrada on one ``loihi2`` chip) shows the compiler's refusal instead.  With ``out_dir`` it writes
-figures and a one-page Markdown summary (:mod:`compiler.demo.figures`).
+figures and a one-page Markdown summary (:mod:`radarsnn.demo.figures`).
 
 Examples
 --------
@@ -26,13 +26,13 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from backends.atomic import check_output
-from compiler.cli.chain import write_output
-from compiler.demo.figures import rd_maps, shown_range_bins
-from compiler.demo.matching import detection_peaks, score_peaks
-from compiler.demo.rasters import spike_times
-from compiler.demo.scenes import SceneReport, TargetRow, run_scene
 from compiler.report.render import latency_line, totals_line
 from radar.config import preset
+from radarsnn.cli.chain import write_output
+from radarsnn.demo.figures import rd_maps, shown_range_bins
+from radarsnn.demo.matching import detection_peaks, score_peaks
+from radarsnn.demo.rasters import spike_times
+from radarsnn.demo.scenes import SceneReport, TargetRow, run_scene
 
 __all__ = ["DEFAULT_TARGET", "DemoReport", "SceneReport", "TargetRow", "detection_peaks",
            "run_demo", "score_peaks"]

@@ -9,7 +9,7 @@ motifs are chosen to keep the contract and the frame deadline (``motifs="auto"``
 docs/accuracy.md) — and run it on the reference simulator (the spiking chain); a
 target on which nothing holds or fits is reported with the compiler's typed error
 (naming the stage, or the network and its steps). Then score
-both against the ground truth (:mod:`compiler.demo.matching`) and the spiking
+both against the ground truth (:mod:`radarsnn.demo.matching`) and the spiking
 detections against the conventional ones cell by cell:
 
 .. math:: \\text{sensitivity} = \\frac{|S \\cap C|}{|C|}, \\qquad
@@ -31,12 +31,12 @@ import numpy as np
 from backends.reference import ReferenceSimulator, run_program
 from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
-from compiler.demo.matching import score_peaks
 from compiler.lowering.dft_common import modulus_rmse
 from ir import evaluate
 from ir.errors import AccuracyError, BudgetError
 from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frame
+from radarsnn.demo.matching import score_peaks
 
 __all__ = ["SceneArrays", "SceneReport", "TargetRow", "run_scene"]
 

@@ -2,14 +2,14 @@
 
 Every function here is deterministic in its arguments (no global state, no
 clock in the results) so a cell's record is the same on any worker, in any
-order.  The runner (:mod:`compiler.sweep.run`) wires them into a task graph:
+order.  The runner (:mod:`radarsnn.sweep.run`) wires them into a task graph:
 frames and the reference are made once per slice and shared by the cells that
 read them.
 
 Examples
 --------
 >>> from ir import Graph
->>> from compiler.sweep.frames import FrameBatch
+>>> from radarsnn.sweep.frames import FrameBatch
 >>> g = {"name": "x", "nodes": [{"id": "a", "op": "input", "shape": {"range": 3}},
 ...      {"id": "m", "op": "magnitude", "input": "a", "kind": "square"},
 ...      {"id": "o", "op": "output", "input": "m"}]}
@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
-from compiler.sweep.cost import run_cost, static_cost
-from compiler.sweep.frames import FrameBatch
 from ir.errors import RadarSNNError, SimulationError
+from radarsnn.sweep.cost import run_cost, static_cost
+from radarsnn.sweep.frames import FrameBatch
 
 __all__ = ["CellTask", "CompileFailure", "reference_values", "compile_point", "evaluate_cell"]
 
@@ -105,7 +105,7 @@ def compile_point(graph: dict, compile_args: dict[str, Any], input_node: str,
 
 def _frame_metrics(cell: CellTask, values, reference, frames: FrameBatch, i: int,
                    registry) -> dict[str, dict[str, float]]:
-    from compiler.sweep.metrics import FrameData
+    from radarsnn.sweep.metrics import FrameData
 
     out = {}
     for m in cell.metrics:

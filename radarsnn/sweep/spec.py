@@ -6,8 +6,9 @@ the frames; :func:`load_spec` validates it into a :class:`SweepSpec` and
 **points** (one compile each).  A **cell** is one point on one slice of
 ``frames_per_cell`` frames: the unit of work, of the results file and of
 resumption.  Its id is the hash of everything that determines its result
-(:func:`cell_key`), so a re-run skips cells already done and an edited spec
-recomputes exactly the cells it changed.
+(:func:`~radarsnn.sweep.cells.cell_key`), so a re-run skips cells already done and an edited spec
+recomputes exactly the cells it changed.  The file's sections (frames, metrics, figures)
+are in :mod:`radarsnn.sweep.sections`, the cell ids in :mod:`radarsnn.sweep.cells`.
 
 Every size is bounded before anything is expanded: the spec's data after YAML alias
 expansion (:data:`MAX_SWEEP_EXPANDED_BYTES`, counted without building it), the grid's
@@ -32,33 +33,27 @@ Examples
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import json
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
-    PositiveInt,
     ValidationError,
-    field_validator,
     model_validator,
 )
 
 from ir.errors import CompileError
 from ir.model import short_repr
+from radarsnn.sweep.sections import FigureSpec, FolderFrames, MetricSpec, SceneFrames, _Model
 
-__all__ = ["SceneFrames", "FolderFrames", "MetricSpec", "FigureSpec", "SweepSpec", "Point",
-           "load_spec", "parse_spec", "cell_key", "CellKey", "Canonical", "MAX_SWEEP_FILE_BYTES",
-           "MAX_SWEEP_EXPANDED_BYTES", "MAX_SWEEP_POINTS", "MAX_SWEEP_GRID_BYTES",
-           "MAX_SWEEP_CELLS", "MAX_PATTERN_CHARS", "MAX_PATTERN_WILDCARDS", "NAMED_AXES"]
+__all__ = ["SweepSpec", "Point", "load_spec", "parse_spec", "expanded_bytes",
+           "MAX_SWEEP_FILE_BYTES", "MAX_SWEEP_EXPANDED_BYTES", "MAX_SWEEP_POINTS",
+           "MAX_SWEEP_GRID_BYTES", "MAX_SWEEP_CELLS", "NAMED_AXES"]
 
 #: Largest sweep file read (not a device, not a giant).
 MAX_SWEEP_FILE_BYTES = 1 << 20
@@ -72,135 +67,9 @@ MAX_SWEEP_POINTS = 10_000
 MAX_SWEEP_GRID_BYTES = 256 << 20
 #: Most cells (points × slices of ``frames_per_cell`` frames) of one sweep.
 MAX_SWEEP_CELLS = 100_000
-#: Longest folder-source ``pattern``, and the most wildcards (``*``, ``?``, ``[``) in it.
-MAX_PATTERN_CHARS = 255
-MAX_PATTERN_WILDCARDS = 8
 #: Grid axes besides :data:`compiler.compile.EXTRA_OPTIONS` (each a ``compile_graph`` argument,
 #: ``chain`` a key of ``chains``, ``mode`` the simulator engine).
 NAMED_AXES = ("chain", "target", "motifs", "calibration", "time_steps", "weight_bits", "mode")
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class SceneFrames(_Model):
-    """Frames from the scene simulator (:func:`radar.scene.simulate_frame`).
-
-    Frame ``i`` is simulated with the seed ``SeedSequence([seed, 0, i])`` (its
-    random scene too, for ``scene: random``), calibration frame ``j`` with
-    ``SeedSequence([seed, 1, j])``: a frame does not depend on ``n_frames``, the
-    worker that makes it, nor on the order of the work.
-    """
-
-    source: Literal["scene"] = "scene"
-    preset: str = "carrada"
-    scene: str = Field("random", description="a radar.scene.SCENE_PRESETS name or 'random'")
-    product: Literal["adc", "rd_power", "rd_db"] = "adc"
-    n_frames: PositiveInt = 100
-    seed: int = Field(0, ge=0)
-    calibration_frames: PositiveInt = 8
-    frames_per_cell: PositiveInt = 25
-
-
-class FolderFrames(_Model):
-    """Frames from ``.npy`` files (:func:`radar.readers.read_npy_array`), sorted by name.
-
-    The last ``calibration_frames`` files calibrate, the first ``n_frames`` of the
-    others (default all) are scored.  ``labels`` names an ``.npy`` of one integer
-    class per file (same order; never itself a frame) for ``classifier_accuracy``.
-    ``pattern`` is a glob relative to ``path``: not empty, no ``..`` and no ``**``,
-    at most :data:`MAX_PATTERN_CHARS` characters and :data:`MAX_PATTERN_WILDCARDS`
-    wildcards (``*``, ``?``, ``[``).
-    """
-
-    source: Literal["folder"]
-    path: str
-    pattern: str = "*.npy"
-    n_frames: PositiveInt | None = None
-    calibration_frames: PositiveInt = 1
-    frames_per_cell: PositiveInt = 25
-    labels: str | None = None
-
-    @field_validator("pattern")
-    @classmethod
-    def _relative_glob(cls, pattern: str) -> str:
-        wildcards = sum(pattern.count(c) for c in "*?[")
-        parts = pattern.replace("\\", "/").split("/")
-        why = ("is empty" if not pattern.strip() else
-               f"is {len(pattern)} characters, over {MAX_PATTERN_CHARS}"
-               if len(pattern) > MAX_PATTERN_CHARS else
-               "holds a NUL byte" if "\0" in pattern else
-               "is absolute" if pattern.startswith(("/", "\\")) or pattern[1:2] == ":" else
-               "names no file" if not [p for p in parts if p not in ("", ".")] else
-               "climbs out of the folder ('..')" if ".." in parts else
-               "is recursive ('**')" if "**" in pattern else
-               f"has {wildcards} wildcards, over {MAX_PATTERN_WILDCARDS}"
-               if wildcards > MAX_PATTERN_WILDCARDS else None)
-        if why:
-            raise ValueError(f"pattern {short_repr(pattern)} {why}; give a file-name glob "
-                             "inside the folder `path`, e.g. '*.npy' or 'run1/frame_*.npy'")
-        return pattern
-
-
-class MetricSpec(_Model):
-    """One metric of every cell: a registered metric ``name``, its ``node``, its options."""
-
-    name: str
-    label: str | None = None
-    node: str | None = None
-    options: dict[str, Any] = Field(default_factory=dict)
-
-    @property
-    def key(self) -> str:
-        """The metric's column name in the summary (``label`` or ``name``)."""
-        return self.label or self.name
-
-
-#: A figure's file name (``<name>.png`` in ``OUT/figures``): a plain name, never a path.
-FIGURE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
-
-
-class FigureSpec(_Model):
-    """One figure of the sweep (a bare string in the file is its ``kind``).
-
-    ``metric`` is ``KEY`` or ``KEY.FIELD`` of a metric (default: the first metric of the
-    kind's metric name, its main field); ``x`` a grid axis; ``cost`` a cost column;
-    ``name`` the file name (``<name>.png``, default the kind): letters, digits, ``_``,
-    ``-`` and ``.``, at most 100, no folder.
-
-    Examples
-    --------
-    >>> FigureSpec(kind="pareto", name="rmse_vs_cost").file_name
-    'rmse_vs_cost.png'
-    >>> [bool(FIGURE_NAME.fullmatch(n)) for n in ("fig7.a", "../../x", "/abs/y", ".hidden")]
-    [True, False, False, False]
-    """
-
-    kind: Literal["fig7", "sft_rmse", "weight_bits", "pareto"]
-    metric: str | None = None
-    x: str | None = None
-    cost: str | None = None
-    name: str | None = None
-
-    @model_validator(mode="before")
-    @classmethod
-    def _from_name(cls, data: Any) -> Any:
-        return {"kind": data} if isinstance(data, str) else data
-
-    @field_validator("name")
-    @classmethod
-    def _plain_name(cls, name: str | None) -> str | None:
-        if name is not None and not FIGURE_NAME.fullmatch(name):
-            raise ValueError("a figure name is a file name in OUT/figures, not a path: "
-                             "letters, digits, '_', '-' and '.' (first a letter or digit, at "
-                             "most 100), e.g. 'fig7_carrada'")
-        return name
-
-    @property
-    def file_name(self) -> str:
-        """``<name or kind>.png``."""
-        return f"{self.name or self.kind}.png"
 
 
 @dataclass(frozen=True)
@@ -342,78 +211,9 @@ class SweepSpec(_Model):
         """Frames scored per point (a folder's count is read from the disk)."""
         if self.frames.source == "scene":
             return self.frames.n_frames
-        from compiler.sweep.frames import folder_files
+        from radarsnn.sweep.frames import folder_files
 
         return len(folder_files(self.frames, self.base_dir)[0])
-
-
-def cell_key(*parts: Any) -> str:
-    """16 hex digits of the SHA-256 of the canonical JSON of ``parts``.
-
-    Examples
-    --------
-    >>> cell_key({"b": 1, "a": [1, 2]}, (0, 25)) == cell_key({"a": [1, 2], "b": 1}, [0, 25])
-    True
-    >>> len(cell_key("x"))
-    16
-    """
-    return CellKey(*parts).hex()
-
-
-class Canonical(bytes):
-    """A part already in :func:`cell_key`'s canonical JSON (:meth:`Canonical.of`), hashed as
-    is: a large part shared by many keys is serialised once."""
-
-    @classmethod
-    def of(cls, part: Any) -> Canonical:
-        """``part`` serialised as :func:`cell_key` serialises it."""
-        return cls(_canonical(part))
-
-
-def _canonical(part: Any) -> bytes:
-    if isinstance(part, Canonical):
-        return bytes(part)
-    return json.dumps(part, sort_keys=True, separators=(",", ":"), default=str).encode()
-
-
-class CellKey:
-    """:func:`cell_key` built a part at a time: a prefix is serialised and hashed once and
-    shared by every key that extends it (the chain, for each of the grid's points).
-
-    ``CellKey(a).then(b, c).hex() == cell_key(a, b, c)``: the hash of the canonical JSON
-    list, fed item by item.
-
-    Examples
-    --------
-    >>> chain = CellKey({"nodes": ["..."]})
-    >>> chain.then({"time_steps": 8}, "step").hex() == cell_key({"nodes": ["..."]},
-    ...                                                          {"time_steps": 8}, "step")
-    True
-    >>> CellKey(Canonical.of({"b": 1, "a": 2})).hex() == cell_key({"a": 2, "b": 1})
-    True
-    """
-
-    def __init__(self, *parts: Any) -> None:
-        self._hash, self._empty = hashlib.sha256(b"["), True
-        self._add(parts)
-
-    def _add(self, parts: tuple) -> None:
-        for part in parts:
-            self._hash.update((b"" if self._empty else b",") + _canonical(part))
-            self._empty = False
-
-    def then(self, *parts: Any) -> CellKey:
-        """A new key: this one's parts, then ``parts`` (this one is unchanged)."""
-        other = CellKey.__new__(CellKey)
-        other._hash, other._empty = self._hash.copy(), self._empty
-        other._add(parts)
-        return other
-
-    def hex(self) -> str:
-        """16 hex digits, as :func:`cell_key`."""
-        done = self._hash.copy()
-        done.update(b"]")
-        return done.hexdigest()[:16]
 
 
 def load_spec(path: str | Path) -> SweepSpec:

@@ -11,7 +11,7 @@ Hann range window, Doppler fftshifted) and ``rd_db`` (``10·log10`` of it).
 
 Examples
 --------
->>> from compiler.sweep.spec import SceneFrames
+>>> from radarsnn.sweep.sections import SceneFrames
 >>> src = SceneFrames(preset="carrada", scene="random", product="rd_db", seed=3)
 >>> a = load_frames(src, ".", 1, 2)
 >>> a.arrays[0].shape, a.indices

@@ -7,7 +7,7 @@ the measured seeds and scores both chains:
 
 * cell sensitivity / precision of the spiking detections against the conventional ones,
   ``|S ∩ C| / |C|`` and ``|S ∩ C| / |S|``;
-* ground-truth targets found (± 1 bin, :mod:`compiler.demo.matching`) by each chain — for a
+* ground-truth targets found (± 1 bin, :mod:`radarsnn.demo.matching`) by each chain — for a
   range-profile chain (no Doppler DFT) each (target, chirp) pair counts, the target's bin
   following its range migration (:func:`radar.scene.chirp_range_bins`);
 * *firm* targets: those the conventional chain still finds with its CFAR threshold 1 dB
@@ -40,13 +40,13 @@ from backends.reference import ReferenceSimulator, run_program
 from compiler.accuracy.contract import firm_detections
 from compiler.chains import CA_CFAR, range_cfar_chain, range_doppler_chain
 from compiler.compile import compile_graph
-from compiler.demo.matching import range_peak_hits, score_peaks, score_range_peaks
 from compiler.hardware import load_profile
 from ir import Graph, evaluate
 from ir.errors import BudgetError, RadarConfigError
 from radar.config import RadarConfig
 from radar.scene import Frame, chirp_range_bins
 from radar.scene_cases import SCENE_CASES
+from radarsnn.demo.matching import range_peak_hits, score_peaks, score_range_peaks
 
 __all__ = ["HARD_CASES", "CaseScore", "HardCase", "compile_for", "measure_case",
            "score_frame"]

@@ -1,15 +1,16 @@
 """The ``radarsnn`` command line.
 
-Sub-commands live in small modules, each with an ``add_parsers(subparsers)``
-function, collected explicitly in :data:`COMMAND_MODULES`:
+Sub-commands live in small modules of this package, each with an
+``add_parsers(subparsers)`` function; :data:`COMMANDS` maps each sub-command to the
+function that imports its module:
 
-* :mod:`compiler.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
-* :mod:`compiler.cli.run` — ``run``; :mod:`compiler.cli.export_nir` — ``export-nir``;
-  :mod:`compiler.cli.import_nir` — ``import-nir``;
-* :mod:`compiler.cli.demo` — ``demo``, ``bench``;
-* :mod:`backends.emit.command` — ``emit``; :mod:`compiler.sweep.command` — ``sweep``
+* :mod:`radarsnn.cli.chain` — ``validate``, ``schema``, ``compile``, ``report``;
+* :mod:`radarsnn.cli.run` — ``run``; :mod:`radarsnn.cli.export_nir` — ``export-nir``;
+  :mod:`radarsnn.cli.import_nir` — ``import-nir``;
+* :mod:`radarsnn.cli.demo` — ``demo``, ``bench``;
+* :mod:`radarsnn.cli.emit` — ``emit``; :mod:`radarsnn.cli.sweep` — ``sweep``
   (Dask is imported only when a sweep runs);
-* :mod:`backends.crosscheck.command` — ``crosscheck``.
+* :mod:`radarsnn.cli.crosscheck` — ``crosscheck``.
 
 Exit status (:data:`EXIT_OK`, :data:`EXIT_ERROR`, :data:`EXIT_USAGE`): 0 on success;
 1 on a runtime error — an error of the project's hierarchy, an unreadable file, or a
@@ -41,13 +42,13 @@ import logging
 import os
 import sys
 import warnings
-from collections.abc import Sequence
-from importlib import import_module
+from collections.abc import Callable, Sequence
+from types import ModuleType
 
-from compiler.cli.usage import UsageError
 from ir.errors import RadarSNNError
+from radarsnn.cli.usage import UsageError
 
-__all__ = ["COMMAND_MODULES", "COMMAND_OF", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE",
+__all__ = ["COMMANDS", "EXIT_ERROR", "EXIT_OK", "EXIT_USAGE",
            "LOGGED_PACKAGES", "build_parser", "configure_logging", "main", "show_warning"]
 
 #: Exit status of a command that did its work.
@@ -59,20 +60,56 @@ EXIT_USAGE = 2
 #: The first-party packages whose loggers ``-v`` shows.
 LOGGED_PACKAGES = ("ir", "radar", "compiler", "backends")
 
-#: Modules whose ``add_parsers(subparsers)`` add the sub-commands, in help order.
-COMMAND_MODULES = ("compiler.cli.chain", "compiler.cli.run", "compiler.cli.demo",
-                   "backends.emit.command", "compiler.sweep.command", "compiler.cli.export_nir",
-                   "compiler.cli.import_nir", "backends.crosscheck.command")
-#: Sub-command -> the module of :data:`COMMAND_MODULES` that adds it.  :func:`main` imports
-#: only the module of the command it runs (none for ``--version``), so a command does not
-#: pay for the others' imports (Dask, the emitter, …); a command missing here makes it
-#: import them all.
-COMMAND_OF = {"validate": "compiler.cli.chain", "schema": "compiler.cli.chain",
-              "compile": "compiler.cli.chain", "report": "compiler.cli.chain",
-              "run": "compiler.cli.run", "demo": "compiler.cli.demo", "bench": "compiler.cli.demo",
-              "emit": "backends.emit.command", "sweep": "compiler.sweep.command",
-              "export-nir": "compiler.cli.export_nir", "import-nir": "compiler.cli.import_nir",
-              "crosscheck": "backends.crosscheck.command"}
+
+# One function per command module: a normal import, made when a command needs it.
+def _chain() -> ModuleType:
+    from radarsnn.cli import chain
+    return chain
+
+
+def _run() -> ModuleType:
+    from radarsnn.cli import run
+    return run
+
+
+def _demo() -> ModuleType:
+    from radarsnn.cli import demo
+    return demo
+
+
+def _emit() -> ModuleType:
+    from radarsnn.cli import emit
+    return emit
+
+
+def _sweep() -> ModuleType:
+    from radarsnn.cli import sweep
+    return sweep
+
+
+def _export_nir() -> ModuleType:
+    from radarsnn.cli import export_nir
+    return export_nir
+
+
+def _import_nir() -> ModuleType:
+    from radarsnn.cli import import_nir
+    return import_nir
+
+
+def _crosscheck() -> ModuleType:
+    from radarsnn.cli import crosscheck
+    return crosscheck
+
+
+#: Sub-command -> the function importing the module whose ``add_parsers`` adds it, in help
+#: order.  :func:`main` imports only the module of the command it runs (none for
+#: ``--version``), so a command does not pay for the others' imports (Dask, the emitter,
+#: …); a command missing here makes it import them all.
+COMMANDS: dict[str, Callable[[], ModuleType]] = {
+    "validate": _chain, "schema": _chain, "compile": _chain, "report": _chain, "run": _run,
+    "demo": _demo, "bench": _demo, "emit": _emit, "sweep": _sweep,
+    "export-nir": _export_nir, "import-nir": _import_nir, "crosscheck": _crosscheck}
 
 
 def _version() -> str:
@@ -91,13 +128,19 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 
-def build_parser(modules: Sequence[str] | None = None) -> argparse.ArgumentParser:
+def build_parser(modules: Sequence[ModuleType] | None = None) -> argparse.ArgumentParser:
     """The argument parser of the ``radarsnn`` command.
 
     Parameters
     ----------
-    modules : sequence of str, optional
-        The modules whose sub-commands to add (default: all of :data:`COMMAND_MODULES`).
+    modules : sequence of module, optional
+        The modules whose sub-commands to add (default: every module of :data:`COMMANDS`).
+
+    Examples
+    --------
+    >>> parser = build_parser([_run()])
+    >>> parser.parse_args(["run", "DIR", "-i", "x.npy"]).command
+    'run'
     """
     parser = _Parser(
         prog="radarsnn",
@@ -109,8 +152,10 @@ def build_parser(modules: Sequence[str] | None = None) -> argparse.ArgumentParse
                         help="log what the compiler and simulator do (-v: info, -vv: debug)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 help="the sub-command (radarsnn COMMAND --help for its options)")
-    for name in COMMAND_MODULES if modules is None else modules:
-        import_module(name).add_parsers(sub)
+    if modules is None:
+        modules = [load() for load in dict.fromkeys(COMMANDS.values())]
+    for module in modules:
+        module.add_parsers(sub)
     for command in sub.choices.values():  # also after the command: radarsnn run ... --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                              help="show the full traceback of an error")
@@ -180,17 +225,19 @@ def _silence_stdout() -> None:
         pass
 
 
-def _modules_for(argv: Sequence[str]) -> tuple[str, ...] | None:
+def _modules_for(argv: Sequence[str]) -> tuple[ModuleType, ...] | None:
     """The modules ``argv`` needs: its command's, none for a bare ``--version``, else all.
 
     Examples
     --------
-    >>> _modules_for(["-v", "run", "DIR"]), _modules_for(["--version"]), _modules_for([])
-    (('compiler.cli.run',), (), None)
+    >>> [m.__name__ for m in _modules_for(["-v", "run", "DIR"])]
+    ['radarsnn.cli.run']
+    >>> _modules_for(["--version"]), _modules_for([])
+    ((), None)
     """
     for arg in argv:  # the options before the command take no value
-        if arg in COMMAND_OF:
-            return (COMMAND_OF[arg],)
+        if arg in COMMANDS:
+            return (COMMANDS[arg](),)
         if not arg.startswith("-"):
             return None  # an unknown command: every module, for argparse's message
     return () if "--version" in argv and not {"-h", "--help"} & set(argv) else None
