@@ -141,10 +141,18 @@ class _Invalid:
         >>> typed.errors(include_url=False)[0]["loc"]
         ('n',)
         """
-        new = cls.from_exception_data(err.title, err.errors())  # type: ignore[attr-defined]
-        new.message = message
-        new.args = (message,)
-        return new
+        return _rebuild(cls, err.title, err.errors(), message)
+
+    def __reduce__(self) -> tuple:  # pickled with its message (sweep workers, copies)
+        return _rebuild, (type(self), self.title, self.errors(), self.message)  # type: ignore
+
+
+def _rebuild(cls: type, title: str, errors: list, message: str) -> Any:
+    """An ``_Invalid`` subclass instance of ``title`` and ``errors`` reading ``message``."""
+    new = cls.from_exception_data(title, errors)  # type: ignore[attr-defined]
+    new.message = message
+    new.args = (message,)
+    return new
 
 
 class NetworkValidationError(_Invalid, NetworkError, ValidationError):  # type: ignore[misc]

@@ -124,3 +124,13 @@ def test_good_records_still_build():
     assert NeuronParams(v_th=2.0).v_th == 2.0
     assert Population(id="p", shape={"r": 2}).size == 2
     assert Tolerances().lost_max == 0.01
+
+
+def test_the_error_pickles_with_its_message():
+    import pickle
+
+    with pytest.raises(NetworkValidationError) as info:
+        NeuronParams(v_th=-1.0)
+    back = pickle.loads(pickle.dumps(info.value))
+    assert type(back) is NetworkValidationError and str(back) == str(info.value)
+    assert back.errors(include_url=False)[0]["loc"] == ("v_th",)
