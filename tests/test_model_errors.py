@@ -12,6 +12,7 @@ import pytest
 from pydantic import ValidationError
 
 from compiler.accuracy.contract import Tolerances
+from compiler.hardware.figures import EnergyFigures, Figure
 from compiler.passes.static_split import StaticSplitOptions
 from compiler.snn import (
     Decoder,
@@ -112,6 +113,10 @@ def test_resonator_params_refusals_are_network_errors():
      "Tolerances: field 'lost_max': Input should be less than or equal to 1 (got 2.0)"),
     (lambda: StaticSplitOptions(static_split="on"),
      "StaticSplitOptions: field 'static_split': Input should be 'auto' or 'off' (got 'on')"),
+    (lambda: Figure(value=-1.0, source="datasheet"),
+     "Figure: field 'value': Input should be greater than or equal to 0 (got -1.0)"),
+    (lambda: EnergyFigures(spike_j={"value": 1e-12, "source": ""}),
+     "EnergyFigures: field 'spike_j.source': String should have at least 1 character (got '')"),
 ])
 def test_compiler_option_records_raise_compile_errors(build, message):
     with pytest.raises(CompileValidationError) as info:
