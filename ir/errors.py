@@ -149,7 +149,13 @@ class _Invalid:
 
 def _rebuild(cls: type, title: str, errors: list, message: str) -> Any:
     """An ``_Invalid`` subclass instance of ``title`` and ``errors`` reading ``message``."""
-    new = cls.from_exception_data(title, errors)  # type: ignore[attr-defined]
+    try:
+        new = cls.from_exception_data(title, errors)  # type: ignore[attr-defined]
+    except KeyError:  # a validator's own error type (PydanticCustomError): keep its text
+        from pydantic_core import PydanticCustomError
+
+        new = cls.from_exception_data(title, [  # type: ignore[attr-defined]
+            {**e, "type": PydanticCustomError(e["type"], e["msg"])} for e in errors])
     new.message = message
     new.args = (message,)
     return new

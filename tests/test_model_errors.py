@@ -139,3 +139,26 @@ def test_the_error_pickles_with_its_message():
     back = pickle.loads(pickle.dumps(info.value))
     assert type(back) is NetworkValidationError and str(back) == str(info.value)
     assert back.errors(include_url=False)[0]["loc"] == ("v_th",)
+
+
+def test_a_validator_s_own_error_type_keeps_its_text():
+    from pydantic import field_validator
+    from pydantic_core import PydanticCustomError
+
+    from ir.model import CheckedModel
+
+    class Gain(CheckedModel):
+        error_class = CompileValidationError
+        db: float
+
+        @field_validator("db")
+        @classmethod
+        def _audible(cls, value: float) -> float:
+            if value > 60:
+                raise PydanticCustomError("too_loud", "{db} dB is over 60 dB", {"db": value})
+            return value
+
+    with pytest.raises(CompileValidationError) as info:
+        Gain(db=70.0)
+    assert str(info.value) == "Gain: field 'db': 70.0 dB is over 60 dB (got 70.0)"
+    assert info.value.errors(include_url=False)[0]["type"] == "too_loud"
