@@ -36,18 +36,8 @@ classes only from an explicit registry (:data:`PROJECTION_KINDS`).
 Examples
 --------
 >>> import tempfile
->>> import numpy as np
->>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection,
-...                           NeuronParams, Population, SpikingNetwork)
->>> net = SpikingNetwork(
-...     name="tiny", n_steps=8,
-...     populations=[Population(id="in", shape={"i": 2}, source=True),
-...                  Population(id="out", shape={"o": 1}, params=NeuronParams(v_th=2.0))],
-...     projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
-...                                   produce=("o",), weights=np.ones((2, 1)))],
-...     encoders=[Encoder(port="x", population="in",
-...                       code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))],
-...     decoders=[Decoder(port="y", population="out", kind="spiked")])
+>>> from compiler.snn.examples import tiny_network
+>>> net = tiny_network()  # two inputs, one neuron
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     folder = save(net, tmp, extra={"note": "demo"})
 ...     back = load(folder)

@@ -13,7 +13,8 @@ into place: a kill between those two renames leaves the old tree beside ``NAME``
 
 Replacing deletes only what an earlier write put there: the caller of
 :func:`replace_directory` names those entries (``owned``, at every depth), anything else in
-the old directory is refused or carried into the new one (``keep``).  :func:`check_output`
+the old directory is refused or carried into the new one (``keep``;
+:mod:`backends.atomic_owned`).  :func:`check_output`
 refuses a path no file (or folder) can be written to: a device such as ``/dev/null``, a
 pipe, a folder given for a file, a NUL byte.
 
@@ -47,6 +48,7 @@ from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
+from backends.atomic_owned import carry_foreign, check_replaceable
 from backends.output_path import check_output
 from ir.errors import ArtifactError
 
@@ -264,70 +266,6 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(b))
 
 
-def _foreign(root: Path, owned: set[str]) -> list[str]:
-    """The relative paths below ``root`` that are not ``owned`` (an owned folder is entered).
-
-    A symbolic link is an entry of its own (never followed); a foreign folder is one
-    entry (what it holds is not listed).
-    """
-    foreign, todo = [], [""]
-    while todo:
-        rel = todo.pop()
-        with os.scandir(root / rel) as it:
-            for entry in it:
-                name = f"{rel}/{entry.name}" if rel else entry.name
-                if name not in owned:
-                    foreign.append(name)
-                elif entry.is_dir(follow_symlinks=False):
-                    todo.append(name)
-    return sorted(foreign)
-
-
-def _check_target(target: Path, owned: set[str] | None, shown: object,
-                  keep: bool) -> list[str]:
-    """The foreign entries of ``target`` (``owned``: None if it does not exist); refuse
-    what replacing it would destroy (``shown``: its name)."""
-    try:
-        cwd = Path.cwd().resolve()
-    except OSError:  # the working directory was deleted
-        cwd = None
-    if cwd is not None and (target == cwd or target in cwd.parents):
-        raise ArtifactError(f"cannot replace {shown}: it is (or holds) the current working "
-                            "directory; save into a sub-directory or change directory first")
-    if owned is None:
-        return []
-    foreign = _foreign(target, owned)
-    if foreign and not keep:
-        raise ArtifactError(
-            f"cannot replace {shown}: it holds {len(foreign)} entries that an earlier save did "
-            f"not write ({', '.join(map(repr, foreign[:5]))}); saving replaces only what it "
-            "wrote, so save into an empty or new directory, or move them away first")
-    return foreign
-
-
-def _link_or_copy(src: str, dst: str) -> None:
-    """A hard link of ``src`` at ``dst`` (the same file: nothing is copied), else a copy."""
-    try:
-        os.link(src, dst, follow_symlinks=False)
-    except OSError:
-        shutil.copy2(src, dst, follow_symlinks=False)
-
-
-def _carry(old: Path, new: Path, foreign: list[str], shown: object) -> None:
-    """Put each ``foreign`` entry of the ``old`` tree at the same place in the ``new`` one."""
-    for rel in foreign:
-        src, dst = old / rel, new / rel
-        if os.path.lexists(dst):
-            raise ArtifactError(f"cannot replace {shown}: its entry {rel!r} was not written by an "
-                                "earlier save and the new one writes that name; move it away "
-                                "first")
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        if src.is_dir() and not src.is_symlink():
-            shutil.copytree(src, dst, symlinks=True, copy_function=_link_or_copy)
-        else:
-            _link_or_copy(str(src), str(dst))
-
-
 def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
                       owned: Callable[[Path], Iterable[str]], keep: bool = False,
                       durable: bool = True) -> T:
@@ -375,7 +313,7 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
     if exists and not target.is_dir():
         raise ArtifactError(f"cannot save into {shown}: it exists and is not a directory")
     mine = set(owned(target)) if exists else None
-    _check_target(target, mine, shown, keep)  # before the work: refuse early
+    check_replaceable(target, mine, shown, keep)  # before the work: refuse early
     target.parent.mkdir(parents=True, exist_ok=True)
     for stale in stale_temporaries(target):
         _remove(stale)
@@ -383,7 +321,7 @@ def replace_directory(target: str | Path, fill: Callable[[Path], T], *,
     os.mkdir(tmp)
     try:
         result = fill(tmp)
-        _carry(target, tmp, _check_target(target, mine, shown, keep), shown)  # as it is now
+        carry_foreign(target, tmp, check_replaceable(target, mine, shown, keep), shown)  # as now
         if durable:
             _sync_tree(tmp)
         if not exists:

@@ -5,6 +5,12 @@ Each case runs in a fresh interpreter under an address-space cap (its size after
 memory growth of the call, and how it ended. ``--code DIR`` measures another checkout
 (e.g. ``git archive OLD radar compiler ir backends | tar -x -C DIR``) on the same files.
 
+A second table reads the test suite's bomb per reader (``tests/bombs.py``,
+``reader_bombs``).  Where a test once bounded a case's time (the tests now check the typed
+refusal and the memory cap; wall-clock bounds do not belong in tests) the row gives that
+bound and ``ok`` or ``SLOW``: 15 s for the ``.mat`` and ``.npz`` bombs, 10 s for the alias
+sweep, 2 s for the 2^33-point grid, 3 s for each reader bomb.
+
     python benchmarks/hostile_inputs.py [--cap-mib 6144] [--timeout-s 120] [--code DIR]
 """
 
@@ -38,6 +44,16 @@ except BaseException as err:
 print(json.dumps([time.perf_counter() - start,
                   (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024, end]))
 """
+
+
+#: Case -> the wall-clock bound a test once asserted on it (seconds).
+BOUNDS_S = {".mat 1x1 double, 3.9 GiB data element": 15.0,
+            ".npz member declaring 3.9 GiB, port (4,)": 15.0,
+            "sweep, 120 000 aliases of 400 KB": 10.0,
+            "sweep, 33 axes x 2 values, planned": 2.0}
+
+#: The bound each reader bomb of ``tests/bombs.py`` was once held to (seconds).
+READER_BOMB_BOUND_S = 3.0
 
 
 def cases(tmp: Path) -> dict[str, tuple[Path, str]]:
@@ -106,19 +122,32 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--code", type=Path, default=ROOT, help="the checkout to measure")
     args = p.parse_args(argv)
     env = {**os.environ, "PYTHONPATH": str(args.code.resolve()), "OPENBLAS_NUM_THREADS": "1"}
+
+    def run(call: str, cwd: str, bound: float | None) -> str:
+        """The row of one call: seconds, peak growth, outcome, and the bound it keeps."""
+        code = _CHILD.format(call=call, cap=args.cap_mib << 20)
+        try:
+            done = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                  text=True, timeout=args.timeout_s, env=env, cwd=cwd)
+            seconds, growth, end = json.loads(done.stdout.splitlines()[-1])
+        except subprocess.TimeoutExpired:
+            return f"over {args.timeout_s:.0f} s (killed)"
+        except (IndexError, ValueError):
+            return f"child failed: {done.stderr.strip().splitlines()[-1:]}"
+        kept = "" if bound is None else (
+            f"  [bound {bound:g} s: {'ok' if seconds < bound else 'SLOW'}]")
+        return f"{seconds:9.4f} s {growth:8.0f} MiB{kept}  {end}"
+
     with tempfile.TemporaryDirectory() as tmp:
         for name, (path, call) in cases(Path(tmp)).items():
-            code = _CHILD.format(call=call, cap=args.cap_mib << 20)
-            try:
-                done = subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                      text=True, timeout=args.timeout_s, env=env, cwd=tmp)
-                seconds, growth, end = json.loads(done.stdout.splitlines()[-1])
-                row = f"{seconds:9.4f} s {growth:8.0f} MiB  {end}"
-            except subprocess.TimeoutExpired:
-                row = f"over {args.timeout_s:.0f} s (killed)"
-            except (IndexError, ValueError):
-                row = f"child failed: {done.stderr.strip().splitlines()[-1:]}"
-            print(f"{name:42s} {path.stat().st_size:>10d} B {row}")
+            print(f"{name:42s} {path.stat().st_size:>10d} B "
+                  f"{run(call, tmp, BOUNDS_S.get(name))}", flush=True)
+    from bombs import reader_bombs
+
+    print("\nthe suite's bomb per reader (tests/bombs.py)")
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (call, _) in reader_bombs(Path(tmp)).items():
+            print(f"{name:42s} {run(call, tmp, READER_BOMB_BOUND_S)}", flush=True)
     return 0
 
 

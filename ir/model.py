@@ -23,14 +23,14 @@ from __future__ import annotations
 
 import re
 import reprlib
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, StringConstraints, ValidationError
 
-from ir.errors import IRError
+from ir.errors import CompileValidationError, IRError, NetworkValidationError
 
-__all__ = ["NAME_PATTERN", "IRModel", "Name", "describe_validation_error", "is_name",
-           "short_repr"]
+__all__ = ["NAME_PATTERN", "CheckedModel", "IRModel", "Name", "describe_validation_error",
+           "is_name", "short_repr"]
 
 NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_\-]*$"
 """Node ids and axis names: a letter or ``_``, then letters, digits, ``_`` or ``-``."""
@@ -176,3 +176,55 @@ class IRModel(BaseModel):
     def describe_kind(cls) -> str:
         """How errors name this kind of record (the class name by default)."""
         return cls.__name__
+
+
+class CheckedModel(BaseModel):
+    """Pydantic model whose construction errors are typed radarsnn errors.
+
+    A subclass names its error class in ``error_class``
+    (:class:`~ir.errors.NetworkValidationError` or
+    :class:`~ir.errors.CompileValidationError`); building it with a bad value raises
+    that class, which is also a pydantic ``ValidationError``, with a message naming the
+    record, each bad field, the rule it breaks and the value given; ``model_validate``
+    raises it too, and a nested record's problems are listed under its field.
+
+    Raises
+    ------
+    NetworkValidationError or CompileValidationError
+        When a field is missing, unknown, of the wrong type or out of range.
+
+    Examples
+    --------
+    >>> from ir.errors import NetworkError
+    >>> class Cell(CheckedModel):
+    ...     error_class = NetworkValidationError
+    ...     size: int
+    >>> try:
+    ...     Cell(size=[1])
+    ... except NetworkError as err:
+    ...     print(err)
+    Cell: field 'size': Input should be a valid integer (got [1])
+    """
+
+    error_class: ClassVar[type[NetworkValidationError] | type[CompileValidationError]]
+
+    def __init__(self, **data: Any) -> None:
+        try:
+            super().__init__(**data)
+        except ValidationError as err:
+            raise self._typed(err) from None
+
+    @classmethod
+    def model_validate(cls, obj: Any, **kwargs: Any) -> Any:
+        """Pydantic's ``model_validate``, raising ``error_class`` like the constructor."""
+        try:
+            return super().model_validate(obj, **kwargs)
+        except ValidationError as err:
+            raise cls._typed(err) from None
+
+    @classmethod
+    def _typed(cls, err: ValidationError) -> ValidationError:
+        """``err`` as ``error_class`` (unchanged if it already is a radarsnn error)."""
+        if isinstance(err, cls.error_class):
+            return err
+        return cls.error_class.of(err, f"{cls.__name__}: {describe_validation_error(err)}")

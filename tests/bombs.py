@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import struct
 import zlib
+from pathlib import Path
 
 import numpy as np
 
@@ -107,3 +108,68 @@ def mat_uncompressed_bomb(nbytes: int) -> bytes:
 def mat_v4_bomb(rows: int, cols: int) -> bytes:
     """A v4 ``.mat`` header declaring a ``rows`` x ``cols`` double ``x`` and 8 bytes of data."""
     return struct.pack("<iiiii", 0, rows, cols, 0, 2) + b"x\0" + bytes(8)
+
+
+_GIB = 1 << 30
+
+
+def reader_bombs(tmp: Path) -> dict[str, tuple[str, str]]:
+    """One small bomb per reader: name -> (the call reading it, what its refusal must say).
+
+    The files (4 MB at most, declaring or inflating to 2-4 GiB) are written into ``tmp``;
+    each call is Python source to run in a fresh (capped) interpreter.
+    """
+    files = {
+        "in.npz": npz_bomb((int(3.9 * _GIB) // 8,)),
+        "lying.npz": zip_deflated("x.npy", deflate_zeros(3 * _GIB, raw=True, prefix=npy_header(
+            (2,))), len(npy_header((2,))) + 16),  # the zip entry says 16 bytes of data
+        "framed.npz": zip_deflated("x.npy", deflate_zeros(_GIB, raw=True, prefix=npy_header(
+            (int(4.1 * _GIB) // 32, 4))), 1 << 20),  # frames of the port, over 4 GiB
+        "data.mat": mat_bomb(int(3.9 * _GIB)),
+        "dims.mat": mat_bomb(0, dims_bytes=3 * _GIB),
+        "tag.mat": mat_uncompressed_bomb(4 * _GIB - 64),
+        "v4.mat": mat_v4_bomb(16_000, 16_000),
+        "in.npy": npy_header((10**12,)) + bytes(16),
+        "art.npz": npz_bomb((int(3.9 * _GIB) // 8,)),
+    }
+    for name, data in files.items():
+        (tmp / name).write_bytes(data)
+    with (tmp / "big.bin").open("wb") as f:
+        f.truncate(512 << 20)
+    (tmp / "frames").mkdir()
+    for i in range(2):
+        np.save(tmp / "frames" / f"f{i}.npy", np.zeros(4))
+    (tmp / "frames" / "f2.npy").write_bytes(npy_header((10**12,)) + bytes(16))
+    arrays = ("from radarsnn.cli.arrays import load_arrays; "
+              "load_arrays([{p!r}], ['x'], 'chain c', shapes={{'x': {port}}})")
+    return {
+        "npz input": (arrays.format(p=str(tmp / "in.npz"), port=(4,)),
+                      "but the port takes (4,)"),
+        "npz member inflating past its size": (
+            arrays.format(p=str(tmp / "lying.npz"), port=(4,)), "not a readable .npz archive"),
+        "npz framed input over 4 GiB": (arrays.format(p=str(tmp / "framed.npz"), port=(4,)),
+                                        "over the limit of 4294967296"),
+        "mat data element": (arrays.format(p=str(tmp / "data.mat"), port=(1,)),
+                             "inflates to more than"),
+        "mat dimensions": (arrays.format(p=str(tmp / "dims.mat"), port=(1,)),
+                           "not a readable .mat"),
+        "mat uncompressed tag": (arrays.format(p=str(tmp / "tag.mat"), port=(1,)),
+                                 "holds a data element of 4294967232 bytes"),
+        "mat v4 header": (arrays.format(p=str(tmp / "v4.mat"), port=(16_000, 16_000)),
+                          "but the file holds 30"),
+        "npy input": (arrays.format(p=str(tmp / "in.npy"), port=(4,)), "over the limit"),
+        "bin capture": ("from radarsnn.cli.arrays import load_arrays; load_arrays("
+                        f"[{str(tmp / 'big.bin')!r}], ['x'], 'c', bin_layout='samples=256,"
+                        "chirps=128,rx=4', shapes={'x': (4, 64, 256)})", "but the port takes"),
+        "artifact arrays.npz": ("from pathlib import Path; from backends.npz_reader import "
+                                f"read_npz; read_npz(Path({str(tmp / 'art.npz')!r})."
+                                "read_bytes(), Path('arrays.npz'))", "is compressed"),
+        "classifier weights": ("from ir.classifier_forward.weights import load_weights; "
+                               "from ir.ops.classify import Classifier; load_weights(Classifier."
+                               f"model_construct(weights={str(tmp / 'in.npz')!r}), (16, 16), "
+                               "'cls')", "over the limit"),
+        "folder frame": ("from radarsnn.sweep.frames import load_frames; from radarsnn.sweep."
+                         "sections import FolderFrames; load_frames(FolderFrames(source='folder', "
+                         f"path='frames'), {str(tmp)!r}, 0, 1, calibration=True)",
+                         "over the limit"),
+    }

@@ -47,17 +47,16 @@ def test_read_bytes_reads_a_file_that_reports_no_size_and_one_that_grows(tmp_pat
 
 
 def _outcome(setup: str, call: str, headroom_bytes: int = 512 * _MIB, timeout_s: float = 60.0):
-    """``(kind, text, seconds)`` of ``call`` in a capped child: ``ok`` and the result's
-    shape, or the exception's class name and message."""
+    """``(kind, text)`` of ``call`` in a capped child: ``ok`` and the result's shape, or the
+    exception's class name and message."""
     done = run_capped(setup, f"""
-        import json, time
-        start = time.perf_counter()
+        import json
         try:
             result = {call}
             out = ["ok", str(getattr(result, "shape", result))]
         except BaseException as err:
             out = [type(err).__name__, str(err)[:300]]
-        print(json.dumps(out + [time.perf_counter() - start]))
+        print(json.dumps(out))
         """, headroom_bytes=headroom_bytes, timeout_s=timeout_s)
     assert done.returncode == 0, done.stderr[-2000:]
     return tuple(json.loads(done.stdout.splitlines()[-1]))
@@ -70,10 +69,11 @@ def test_a_mat_variable_whose_data_element_inflates_past_its_shape_is_refused(tm
     (tmp_path / "dims.mat").write_bytes(mat_bomb(0, dims_bytes=3 << 30))  # the listing's bomb
     for name, why in [("bomb.mat", "inflates to more than 4112 bytes"),
                       ("dims.mat", "not a readable .mat file")]:
-        kind, text, seconds = _outcome("from radar.readers import read_mat_array",
-                                       f"read_mat_array({str(tmp_path / name)!r})")
+        # inflating took 31-47 s; the address-space cap is the check (the time it takes now:
+        # benchmarks/hostile_inputs.py)
+        kind, text = _outcome("from radar.readers import read_mat_array",
+                              f"read_mat_array({str(tmp_path / name)!r})")
         assert kind == "RadarConfigError" and why in text, (kind, text)
-        assert seconds < 15.0  # inflating took 31-47 s; the address-space cap is the check
 
 
 def test_an_npz_bomb_is_refused_from_its_header_before_it_is_inflated(tmp_path):
@@ -81,12 +81,13 @@ def test_an_npz_bomb_is_refused_from_its_header_before_it_is_inflated(tmp_path):
 
     # 4 MB declaring 3.9 GiB (within the 4 GiB cap) that the port (4,) cannot take
     (tmp_path / "bomb.npz").write_bytes(npz_bomb((int(3.9 * (1 << 30)) // 8,)))
-    kind, text, seconds = _outcome(
+    # decoding took 7-47 s; the address-space cap is the check (benchmarks/hostile_inputs.py
+    # times it)
+    kind, text = _outcome(
         "from radarsnn.cli.arrays import load_arrays",
         f"load_arrays([{str(tmp_path / 'bomb.npz')!r}], ['x'], 'chain c', shapes={{'x': (4,)}})")
     assert kind == "RadarConfigError", (kind, text)
     assert "declares shape (523449139,), but the port takes (4,)" in text
-    assert seconds < 15.0  # decoding took 7-47 s; the address-space cap is the check
 
 
 def test_a_bin_capture_is_checked_against_the_port_before_it_is_read(tmp_path):
@@ -94,14 +95,15 @@ def test_a_bin_capture_is_checked_against_the_port_before_it_is_read(tmp_path):
     capture = tmp_path / "big.bin"
     with capture.open("wb") as f:
         f.truncate(512 * _MIB)
-    kind, text, seconds = _outcome(  # the readers' imports (scipy) before the cap
-        "import radar.readers, radar.ti_capture\nfrom radarsnn.cli.arrays import load_arrays",
+    # decoding took 7-47 s; the address-space cap is the check (benchmarks/hostile_inputs.py
+    # times it)
+    kind, text = _outcome(  # the reader's lazy imports (scipy) come before the cap
+        "from radarsnn.cli.arrays import load_arrays\nimport radar.ti_capture",
         f"load_arrays([{str(capture)!r}], ['adc'], 'chain c', "
         "bin_layout='samples=256,chirps=128,rx=4', shapes={'adc': (4, 64, 256)})",
         headroom_bytes=256 * _MIB)
     assert kind == "RadarConfigError", (kind, text)
     assert "declares shape (1024, 4, 128, 256), but the port takes (4, 64, 256)" in text
-    assert seconds < 15.0  # decoding took 7-47 s; the address-space cap is the check
 
 
 def test_bin_decoding_needs_the_result_plus_bounded_pieces(tmp_path):
@@ -111,7 +113,7 @@ def test_bin_decoding_needs_the_result_plus_bounded_pieces(tmp_path):
     words[:8] = [1, 2, 10, 20, 3, 4, 30, 40]
     words.tofile(capture)
     del words
-    kind, text, _ = _outcome(
+    kind, text = _outcome(
         "from radar.ti_capture import TiBinLayout, read_ti_bin",
         f"read_ti_bin({str(capture)!r}, TiBinLayout.parse('samples=256,chirps=128,rx=4'))"
         "[0, 0, 0, :4].tolist()", headroom_bytes=(384 + 128) * _MIB)

@@ -44,9 +44,14 @@ def test_a_guard_keeps_the_body_and_codes_values_above_it_within_its_step() -> N
 
 
 def test_ti_chirp_calibrated_on_the_other_three_is_not_clipped(shared_data) -> None:
-    """Chirp 0's spectrum peaks 5.5× above any calibration chirp's (RMSE 0.21 before)."""
+    """Chirp 0's spectrum peaks 5.6× above any calibration chirp's (RMSE 0.23 before).
+
+    Every second sample of the chirps (512 of 1 024): the same spectrum folded once, whose
+    peaks stand as far apart (5.56× here, 5.52× on all samples; RMSE 0.0009 with the guard
+    and 0.23 without, 0.0018 and 0.23 on all), at about half the CPU time.
+    """
     x, _ = load_ti_chirps(shared_data)
-    x = x.astype(np.float64)
+    x = x[:, ::2].astype(np.float64)
     n = x.shape[1]
     program = compile_graph(_range_graph(n), load_profile("loihi2"),
                             calibration_inputs={"x": x[1:]}, time_steps=256,

@@ -81,9 +81,15 @@ def test_brian2_reads_the_same_membranes(graded) -> None:
 
 
 def test_graded_is_more_accurate_than_the_charging_stage_on_the_ti_chirps(shared_data) -> None:
-    """Leave-one-chirp-out on loihi2 at T = 256: RMSE 0.0038 graded vs 0.0052 time-coded."""
+    """Leave-one-chirp-out on loihi2 at T = 256: RMSE 0.00025 graded vs 0.00054 time-coded.
+
+    The first 512 samples of each chirp: about a fifth of the CPU time of all 1 024 (the
+    two compiles round the weights against a 512- instead of a 1 024-input second moment),
+    and the closer case (the charging stage's error is 2.2 × the graded one's there, 11 × on
+    all 1 024).
+    """
     x, _ = load_ti_chirps(shared_data)
-    x = x.astype(np.float64)
+    x = x[:, :512].astype(np.float64)
     n = x.shape[1]
     errors = {}
     for mode in ("graded", "time"):

@@ -6,8 +6,6 @@ The chain here is deliberately independent of radar.dsp: hann window + FFT along
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from hypothesis import given
@@ -256,11 +254,12 @@ def test_any_single_target_peaks_at_truth(range_frac, velocity_frac, azimuth):
     assert truth.aliased == (not -SMALL.max_velocity_mps <= v < SMALL.max_velocity_mps)
 
 
-def test_seed003_frame_is_fast():
+def test_seed003_frame_simulates():
+    # its speed (under 1 s) is a benchmark claim: benchmarks/speed_claims.py prints it
     cfg, scene = preset("seed003"), seed003_scene()
-    start = time.perf_counter()
-    simulate_frame(cfg, scene, seed=0)
-    assert time.perf_counter() - start < 1.0
+    frame = simulate_frame(cfg, scene, seed=0)
+    assert frame.adc.shape == (cfg.n_virtual, cfg.n_chirps, cfg.n_samples)
+    assert len(frame.truth) == len(scene.targets)
 
 
 @pytest.mark.parametrize(

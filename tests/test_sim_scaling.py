@@ -3,15 +3,14 @@
 Issue "Hostile input, round two", item 7: counting synaptic events reduced flat batch
 indices with ``np.take(..., mode="wrap")``, which subtracts the population size in a loop
 per index — the count cost grew with the frame index, so a CFAR batch of 80 k frames
-took 12.9 s where 10 k took 0.23 s, while the guard estimated 0.086 s.  The far-frame count
-is timed here with a generous bound; the closed form's scaling over 1 k … 100 k frames is
-measured by ``benchmarks/closed_scaling.py`` (timed asserts do not belong in tests).
+took 12.9 s where 10 k took 0.23 s, while the guard estimated 0.086 s.  Here the far-frame
+count must equal frame 0's and the estimate be linear in frames; what they cost is measured by
+``benchmarks/speed_claims.py`` (the far count against frame 0's) and
+``benchmarks/closed_scaling.py`` (the closed form over 1 k … 100 k frames): timed asserts do
+not belong in tests.
 """
 
 from __future__ import annotations
-
-import statistics
-import time
 
 import numpy as np
 import pytest
@@ -37,26 +36,13 @@ def cfar():
     return net, rng.exponential(size=(16_000, 16, 8))
 
 
-def _median_s(net, x: np.ndarray, repeats: int = 3) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        simulate(net, {"rd": x}, mode="closed", out_of_range="clip", max_time_s=None)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
-def test_counting_the_synaptic_events_of_a_far_frame_costs_what_frame_0_costs(cfar):
+def test_counting_the_synaptic_events_of_a_far_frame_gives_frame_0s_count(cfar):
     net, _ = cfar
     plan = build_plan(net)
     for dl in plan.deliveries.values():
         events = np.arange(dl.src_size).repeat(8)
         far = events + 3_000_000 * dl.src_size  # the same neurons, frame 3 million
-        start = time.perf_counter()
-        got = dl.n_events(0, far)
-        elapsed = time.perf_counter() - start
-        assert got == dl.n_events(0, events) > 0
-        assert elapsed < 0.5, f"{dl.id}: {elapsed:.2f} s to count {far.size} events"
+        assert dl.n_events(0, far) == dl.n_events(0, events) > 0
 
 
 def test_the_estimate_is_linear_in_frames_and_the_closed_form_runs_them(cfar):
@@ -66,4 +52,6 @@ def test_the_estimate_is_linear_in_frames_and_the_closed_form_runs_them(cfar):
     net, x = cfar
     estimated = {n: estimate_simulation(net, n, mode="closed").time_s for n in (1_000, 16_000)}
     assert estimated[16_000] == pytest.approx(16 * estimated[1_000])
-    assert _median_s(net, x[:1_000], repeats=1) < 60  # runs, within the guard's reach
+    result = simulate(net, {"rd": x[:1_000]}, mode="closed", out_of_range="clip")
+    assert result.mode == "closed"  # runs, within the guard's reach
+    assert result.outputs["det"].shape == (1_000, 16, 8)

@@ -126,11 +126,10 @@ def _axes(n):
 
 
 def test_a_grid_is_counted_before_it_is_expanded():
-    import time
-
+    # counted: the refusal names 2^33 points without building them (its time, a few
+    # milliseconds, is measured by benchmarks/hostile_inputs.py)
     axes = _axes(33)
     assert len(axes) == 33
-    start = time.perf_counter()
     with pytest.raises(CompileError, match=r"the grid has 8589934592 points \(the product of "
                                            r"its 33 axes' lengths \[2, 2, .*over the limit of "
                                            r"10000 \(MAX_SWEEP_POINTS\)"):
@@ -143,7 +142,6 @@ def test_a_grid_is_counted_before_it_is_expanded():
                                            r"the limit of 268435456"):
         parse_spec(_spec(grid={"time_steps": list(range(1, 1001)),
                                "input_bounds": [{"x": i, "pad": "p" * 300_000} for i in range(2)]}))
-    assert time.perf_counter() - start < 2.0
     assert len(parse_spec(_spec(grid={a: [0, 1] for a in axes[:13]})).points()) == 8192
 
 
@@ -158,23 +156,23 @@ def test_alias_bombs_in_a_sweep_file_are_refused_unexpanded(tmp_path):
         (tmp_path / name).write_text(text)
         assert (tmp_path / name).stat().st_size < 1 << 20
     body = """
-        import json, time
+        import json
         out = []
         for path in PATHS:
-            start = time.perf_counter()
             try:
                 load_spec(path)
-                out.append(["read", 0])
+                out.append("read")
             except CompileError as err:
-                out.append([str(err)[:300], time.perf_counter() - start])
+                out.append(str(err)[:300])
         print(json.dumps(out))
         """.replace("PATHS", repr([str(tmp_path / n) for n in cases]))
     done = run_capped("from radarsnn.sweep.spec import load_spec\n"
                       "from ir.errors import CompileError", body, timeout_s=60)
     assert done.returncode == 0, done.stderr[-2000:]
-    for text, seconds in json.loads(done.stdout):
+    for text in json.loads(done.stdout):
+        # refused unexpanded (expanding took minutes); the time of the 880 KB YAML parse is
+        # measured by benchmarks/hostile_inputs.py
         assert "more than 16777216 bytes once its aliases are expanded" in text, text
-        assert seconds < 10.0  # the YAML parse of 880 KB; expanding it took minutes
 
 
 def test_expanded_bytes_stops_on_cycles_and_counts_keys():

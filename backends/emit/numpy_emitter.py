@@ -132,18 +132,9 @@ def emit_numpy(source: SpikingNetwork | CompiledProgram | str | os.PathLike, out
 
     Examples
     --------
-    >>> import tempfile, numpy as np
-    >>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection,
-    ...                           NeuronParams, Population, SpikingNetwork)
-    >>> net = SpikingNetwork(name="tiny", n_steps=6,
-    ...     populations=[Population(id="in", shape={"i": 2}, source=True),
-    ...                  Population(id="out", shape={"o": 1},
-    ...                             params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
-    ...     projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
-    ...                                   produce=("o",), weights=np.ones((2, 1)))],
-    ...     encoders=[Encoder(port="x", population="in",
-    ...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))],
-    ...     decoders=[Decoder(port="t", population="out", kind="spike_time", scale=-1.0)])
+    >>> import tempfile
+    >>> from compiler.snn.examples import tiny_network
+    >>> net = tiny_network(kind="spike_time")  # two inputs, one neuron
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     sorted(p.name for p in emit_numpy(net, tmp).iterdir())  # doctest: +NORMALIZE_WHITESPACE
     ['__init__.py', '__main__.py', '_kernels.py', 'names.json', 'network_0.py', 'program.py',

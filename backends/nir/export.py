@@ -29,18 +29,10 @@ never from a test of the projection's kind.
 Examples
 --------
 >>> import numpy as np
->>> from compiler.snn import (Decoder, Encoder, LatencyCode, MatrixProjection, NeuronParams,
-...                           Population, SpikingNetwork)
->>> net = SpikingNetwork(name="tiny", n_steps=8,
-...     populations=[Population(id="x/in", shape={"i": 2}, source=True),
-...                  Population(id="y/out", shape={"o": 1},
-...                             params=NeuronParams(v_th=2.0, reset="value"))],
-...     projections=[MatrixProjection(id="y/w", source="x/in", target="y/out",
-...                                   contract=("i",), produce=("o",), weights=np.ones((2, 1)),
-...                                   delays=np.array([[0], [2]]))],
-...     encoders=[Encoder(port="x", population="x/in",
-...                       code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))],
-...     decoders=[Decoder(port="y", population="y/out", kind="spiked")])
+>>> from compiler.snn import NeuronParams
+>>> from compiler.snn.examples import tiny_network
+>>> net = tiny_network(params=NeuronParams(v_th=2.0, reset="value"),
+...                    delays=np.array([[0], [2]]), scoped=True)
 >>> graph, report = export_network(net)
 >>> sorted(graph.nodes)
 ['x.in', 'y.out', 'y.output', 'y.w.d0', 'y.w.d2', 'y.w.delay2']

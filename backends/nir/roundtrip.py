@@ -11,17 +11,10 @@ it as a plain NIR graph).  Any other graph is read as the NIR subset of :mod:`ba
 
 Examples
 --------
->>> import numpy as np
 >>> from backends.nir.export import export_network
->>> from compiler.snn import (Decoder, Encoder, MatrixProjection, NeuronParams, Population,
-...                           RateCode, SpikingNetwork)
->>> net = SpikingNetwork(name="tiny", n_steps=8,
-...     populations=[Population(id="x/in", shape={"i": 2}, source=True),
-...                  Population(id="y/out", shape={"o": 1}, params=NeuronParams(v_th=2.0))],
-...     projections=[MatrixProjection(id="y/w", source="x/in", target="y/out",
-...                                   contract=("i",), produce=("o",), weights=np.ones((2, 1)))],
-...     encoders=[Encoder(port="x", population="x/in", code=RateCode())],
-...     decoders=[Decoder(port="y", population="y/out", kind="count")])
+>>> from compiler.snn import RateCode
+>>> from compiler.snn.examples import tiny_network
+>>> net = tiny_network(code=RateCode(), kind="count", scoped=True)
 >>> [back] = import_nir(export_network(net)[0])
 >>> back.projections[0].weights.tolist(), back.populations[1] == net.populations[1]
 ([[1.0], [1.0]], True)

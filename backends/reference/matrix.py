@@ -12,7 +12,10 @@ an event-driven product that reads only the weight rows of spiking inputs.
 its own array), never tiled over repetitions; repetition axes are matched by name.
 
 The gathering path's arithmetic (shared by both engines for unweighted events) is
-:mod:`backends.reference.row_sums`'s.
+:mod:`backends.reference.row_sums`'s; the block's row maps are in
+:mod:`~backends.reference.matrix_rows`, the factored dense product of sign-symmetric
+matrices in :mod:`~backends.reference.matrix_factored` and the synaptic-event counts in
+:mod:`~backends.reference.matrix_counts`.
 :meth:`MatrixDelivery.add_to` adds the current into a flat state array touching
 only the rows hit.
 """
@@ -20,43 +23,28 @@ only the rows hit.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from math import prod
 
 import numpy as np
 import scipy.sparse as sp
 
+from backends.reference.matrix_counts import MAX_FANOUT_GROUPS, SynapseCounts
+from backends.reference.matrix_factored import (
+    DENSE_EVENTS_PER_ROW,
+    FactoredProduct,
+    worth_factoring,
+)
+from backends.reference.matrix_rows import BlockRows, block_target_index
 from backends.reference.row_sums import distinct_rows, grouped_sums, n_runs, run_starts
-from backends.reference.signed_factor import SignedFactor, distinct_up_to_sign, signed_factor
+from backends.reference.signed_factor import SignedFactor
 from compiler.snn.network import Population
 from compiler.snn.projections import MatrixProjection
 
-#: Above ``n_in / 16`` weighted events per target row the one-hot BLAS product beats gathering.
-_DENSE_EVENTS_PER_ROW = 16
-
-__all__ = ["MatrixDelivery"]
-
-#: Factor dense matrices of at least this many entries (smaller ones are cheap anyway).
-_FACTOR_MIN_ENTRIES = 4096
-
-
-def _worth_factoring(w, integer: bool) -> SignedFactor | None:
-    """The sign-symmetric factor of a large dense float ``w`` if it halves the work, else None."""
-    if integer or sp.issparse(w) or w.size < _FACTOR_MIN_ENTRIES:
-        return None
-    rows, cols = distinct_up_to_sign(w)  # two mat-vecs: skip the sort when it cannot pay
-    if rows * cols > 0.5 * w.size:
-        return None
-    factor = signed_factor(w)
-    return factor if factor.saving <= 0.5 else None
-
-
-#: Distinct per-source synapse counts up to which synaptic events are counted by groups.
-MAX_FANOUT_GROUPS = 8
+__all__ = ["MAX_FANOUT_GROUPS", "MatrixDelivery"]
 
 
 @dataclass(frozen=True, eq=False)
-class MatrixDelivery:
+class MatrixDelivery(BlockRows, FactoredProduct, SynapseCounts):
     """The delivery plan of one :class:`~compiler.snn.MatrixProjection`.
 
     Attributes
@@ -159,7 +147,7 @@ class MatrixDelivery:
                                        tuple(src.shape[a] for a in proj.contract))
                   if proj.contract else np.zeros(src.size, np.int64))
         block_axes = rep_axes + proj.produce
-        factors = tuple(_worth_factoring(w, integer) for w in weights)
+        factors = tuple(worth_factoring(w, integer) for w in weights)
         to_target = tuple(block_axes.index(a) for a in tgt.axes)
         block_shape = rep_dims + tuple(tgt.shape[a] for a in proj.produce)
         return cls(
@@ -167,7 +155,7 @@ class MatrixDelivery:
             row_synapses=row_synapses, rep_of=rep_of.astype(np.int64),
             col_of=col_of.astype(np.int64), n_reps=prod(rep_dims), n_in=proj.n_in,
             n_out=proj.n_out, block_shape=block_shape, to_target=to_target, integer=integer,
-            factors=factors, target_index=_target_index(block_shape, to_target, proj.n_out),
+            factors=factors, target_index=block_target_index(block_shape, to_target, proj.n_out),
             factor_slots=tuple(None if f is None else (
                 (rep_of * f.core.shape[0] + f.in_row[col_of]).astype(np.int64),
                 f.in_sign[col_of]) for f in factors),
@@ -265,69 +253,6 @@ class MatrixDelivery:
             return np.arange(part.shape[0]), part
         return hit, part
 
-    def event_rows(self, events: np.ndarray, n_batch: int) -> tuple[np.ndarray, np.ndarray]:
-        """The batch row ``b·n_reps + rep`` and the matrix row (``col_of``) of each event.
-
-        Events are flat indices into ``(n_batch, *source_shape)``; with
-        ``n_batch == 1`` no division is needed.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> from compiler.snn import MatrixProjection, Population
-        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
-        ...                      produce=("o",), weights=np.ones((2, 1)))
-        >>> a = Population(id="a", shape={"i": 2, "r": 3}, source=True)
-        >>> d = MatrixDelivery.build(p, a, Population(id="b", shape={"r": 3, "o": 1}))
-        >>> [a.tolist() for a in d.event_rows(np.array([1, 3, 6]), n_batch=2)]
-        [[1, 0, 3], [0, 1, 0]]
-        """
-        if n_batch == 1:
-            return self.rep_of[events], self.col_of[events]
-        b, n = np.divmod(events, self.col_of.size)
-        return b * self.n_reps + self.rep_of[n], self.col_of[n]
-
-    def add_rows(self, hit: np.ndarray, part: np.ndarray, out: np.ndarray) -> None:
-        """``out[target of row r] += part[r]`` for the (distinct) block rows ``hit``, in place."""
-        if self.target_index is None:  # blocks are already in target order
-            out.reshape(-1, self.n_out)[hit] += part
-        else:
-            b, rep = np.divmod(hit, self.n_reps)
-            out[(b * (self.n_reps * self.n_out))[:, None] + self.target_index[rep]] += part
-
-    @cached_property
-    def paired_halves(self) -> tuple[np.ndarray | None, ...]:
-        """Per delay class, ``W[:, 0::2]`` (contiguous) when ``W[:, 1::2] == −W[:, 0::2]``
-        — an output split into ``(y, −y)`` parts — else None (built on first use).
-
-        A sum of such rows is then the sum of their even halves ``h`` and its negation,
-        bit for bit (negation commutes with every rounding); :meth:`add_paired_rows`
-        adds ``h`` and subtracts it (``u − h = u + (−h)``, and ``u`` is never ``−0``
-        where it starts at ``+0`` and gains sums).  Gathering the half rows moves half
-        the bytes from a table half the size.
-        """
-        out = []
-        for w in self.weights:
-            even = None
-            if not sp.issparse(w) and w.ndim == 2 and w.shape[1] >= 2 and w.shape[1] % 2 == 0:
-                half = w[:, 0::2]
-                if np.array_equal(w[:, 1::2], -half):
-                    even = np.ascontiguousarray(half)
-            out.append(even)
-        return tuple(out)
-
-    def add_paired_rows(self, hit: np.ndarray, half: np.ndarray, out: np.ndarray) -> None:
-        """:meth:`add_rows` of the rows ``(h_0, −h_0, h_1, −h_1, …)`` given ``half = h``."""
-        if self.target_index is None:
-            pairs = out.reshape(-1, self.n_out // 2, 2)
-            pairs[hit, :, 0] += half
-            pairs[hit, :, 1] -= half
-        else:
-            b, rep = np.divmod(hit, self.n_reps)
-            index = (b * (self.n_reps * self.n_out))[:, None] + self.target_index[rep]
-            out[index[:, 0::2]] += half
-            out[index[:, 1::2]] -= half
-
     def _row_sums(
         self, k: int, events: np.ndarray, n_batch: int, values: np.ndarray | None,
         workspace: np.ndarray | None = None,
@@ -336,7 +261,7 @@ class MatrixDelivery:
         dtype = np.int64 if self.integer else np.float64
         weights = self.weights[k]
         dense = ((values is not None or self.blas_events) and not self.integer
-                 and events.size * _DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in)
+                 and events.size * DENSE_EVENTS_PER_ROW >= n_batch * self.n_reps * self.n_in)
         if dense and not sp.issparse(weights) and self.factors and self.factors[k] is not None:
             return None, self._folded_product(k, events, n_batch, values)
         rows, cols = self.event_rows(events, n_batch)
@@ -360,7 +285,7 @@ class MatrixDelivery:
             values = None if values is None else values[order]
         data = None if values is None else values.astype(dtype)
         blas = data is not None or self.blas_events
-        if blas and events.size * _DENSE_EVENTS_PER_ROW >= self.n_in * n_runs(rows):
+        if blas and events.size * DENSE_EVENTS_PER_ROW >= self.n_in * n_runs(rows):
             # dense: a one-hot block and one BLAS product.  Only for the closed form's
             # weighted features, or networks the closed form cannot run: otherwise the
             # step engine and the closed form's driven path both gather, adding every
@@ -378,159 +303,3 @@ class MatrixDelivery:
             return hit, one_hot @ weights
         # sparse in time: gather each event's weight row, add them per target row
         return grouped_sums(weights, cols, rows, data, workspace)
-
-    def _folded_product(self, k: int, events: np.ndarray, n_batch: int,
-                        values: np.ndarray | None) -> np.ndarray:
-        """The dense whole-batch product through the sign-symmetric factor of class ``k``.
-
-        The ±-symmetric input rows are folded first (one bincount onto the core's rows,
-        signs applied, events added in order), then one smaller BLAS product with the
-        core, whose columns are spread back with their signs.
-        """
-        factor, (slot, sign) = self.factors[k], self.factor_slots[k]
-        n_core = factor.core.shape[0]
-        if n_batch == 1:
-            index, signed = slot[events], sign[events]
-        else:
-            b, n = np.divmod(events, self.col_of.size)
-            index, signed = b * (self.n_reps * n_core) + slot[n], sign[n]
-        if values is not None:
-            signed = signed * values
-        one_hot = np.bincount(index, weights=signed, minlength=n_batch * self.n_reps * n_core)
-        product = one_hot.reshape(-1, n_core) @ factor.core
-        out = np.take(product, factor.out_col, axis=1)
-        out *= factor.out_sign
-        return out
-
-    def dense_for(self, k: int, n_events: int | None, n_batch: int) -> bool:
-        """Whether :meth:`feature_current` serves weighted events of class ``k`` (the
-        folded whole-batch product :meth:`current` itself takes for ``n_events`` of them;
-        ``None``: whether it could for some count)."""
-        if self.integer or sp.issparse(self.weights[k]) or self.factors[k] is None:
-            return False
-        return n_events is None or n_events * _DENSE_EVENTS_PER_ROW >= (
-            n_batch * self.n_reps * self.n_in)
-
-    def feature_current(self, k: int, feature: np.ndarray, n_batch: int) -> np.ndarray:
-        """:meth:`current` of weighted events given as a dense per-source ``feature``.
-
-        ``feature`` (float64, ``n_batch × source size``) holds each source neuron's event
-        value, 0 for none: the one-hot fold is then one sparse product with the fixed fold
-        of source neurons onto the core's rows (:attr:`_folds`), no event gathers.  In the
-        closed form the values are whole numbers and the fold's sums exact, so the result
-        equals :meth:`current`'s bit for bit (:meth:`dense_for` must hold).
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> from compiler.snn import MatrixProjection, Population
-        >>> n = 64  # a cosine matrix: rows and columns equal up to sign fold to 33 × 33
-        >>> w = np.round(256 * np.cos(2 * np.pi * np.outer(np.arange(n), np.arange(n)) / n)) / 256
-        >>> p = MatrixProjection(id="w", source="a", target="b", contract=("i",),
-        ...                      produce=("o",), weights=w)
-        >>> d = MatrixDelivery.build(p, Population(id="a", shape={"i": n}, source=True),
-        ...                          Population(id="b", shape={"o": n}))
-        >>> events, values = np.array([1, 5, 40, 63]), np.array([3.0, 1.0, 2.0, 4.0])
-        >>> feature = np.zeros(n)
-        >>> feature[events] = values
-        >>> ref = d.current(0, events, 1, values=values)
-        >>> out = d.feature_current(0, feature, 1)
-        >>> d.dense_for(0, events.size, 1), bool(np.array_equal(out, ref))
-        (True, True)
-        """
-        factor, fold = self.factors[k], self._folds[k]
-        n_core = factor.core.shape[0]
-        if n_batch == 1:
-            one_hot = fold @ feature
-        else:
-            one_hot = (fold @ feature.reshape(n_batch, -1).T).T
-        product = (one_hot.reshape(-1, n_core) @ factor.core).reshape(n_batch, -1)
-        spread, sign = self._spreads[k]
-        # the core's columns spread to the target's neurons in target order, with their signs
-        out = np.take(product, spread, axis=1)
-        out *= sign
-        return out.reshape(n_batch, *(self.block_shape[a] for a in self.to_target))
-
-    @cached_property
-    def _spreads(self) -> tuple[tuple[np.ndarray, np.ndarray] | None, ...]:
-        """Per class with a factor: for each target neuron (target order) its entry of the
-        ``(n_reps, core columns)`` product and its sign (built on first use)."""
-        out = []
-        for factor in self.factors:
-            if factor is None:
-                out.append(None)
-                continue
-            size = self.n_reps * self.n_out
-            entry = (np.arange(size) if self.target_index is None
-                     else np.argsort(self.target_index.ravel()))  # block entry per target
-            rep, col = np.divmod(entry, self.n_out)
-            out.append((rep * factor.core.shape[1] + factor.out_col[col],
-                        factor.out_sign[col]))
-        return tuple(out)
-
-    @cached_property
-    def _folds(self) -> tuple[sp.csr_matrix | None, ...]:
-        """Per class with a factor: the fold of source neurons onto the core's rows.
-
-        A ``(n_reps · core rows) × source size`` CSR of the signs (one entry per source
-        neuron whose row is not zero), so ``fold @ feature`` is the one-hot fold of
-        :meth:`_folded_product`; built on first use.
-        """
-        folds = []
-        for factor, slots in zip(self.factors, self.factor_slots, strict=True):
-            if factor is None:
-                folds.append(None)
-                continue
-            slot, sign = slots
-            keep = np.flatnonzero(sign != 0)
-            fold = sp.csr_matrix((sign[keep], (slot[keep], keep)),
-                                 shape=(self.n_reps * factor.core.shape[0], slot.size))
-            fold.sort_indices()
-            folds.append(fold)
-        return tuple(folds)
-
-    def n_events(self, k: int, events: np.ndarray) -> int:
-        """Synaptic events of the events of delay class ``k`` (spikes × synapses reached)."""
-        # flat batch indices -> neurons by one vectorised remainder (np.take's mode="wrap"
-        # subtracts the size in a loop per index: quadratic in the number of frames), skipped
-        # when every event is of the first frame (one pass for the max instead of a division)
-        per_source = self.source_synapses[k]
-        if events.size and int(events.max()) >= self.src_size:
-            events = events % self.src_size
-        return int(per_source[events].sum())
-
-    def synapses_per_source(self, k: int) -> np.ndarray:
-        """Synapses each source neuron reaches through delay class ``k`` (int64, per neuron)."""
-        return self.source_synapses[k]
-
-    @cached_property
-    def source_synapse_groups(self) -> tuple[tuple[tuple[int, np.ndarray], ...] | None, ...]:
-        """Per delay class, the sources grouped by their synapse count: ``(count, mask)``
-        for each non-zero count, or None past :data:`MAX_FANOUT_GROUPS` distinct counts.
-
-        A dense matrix reaches few distinct counts (all of ``n_out``, fewer for a row
-        with zeros), so the synaptic events of a spike mask are ``Σ count ·
-        popcount(mask ∧ group)`` — bool passes instead of a bool @ int64 product.
-        """
-        out = []
-        for per_source in self.source_synapses:
-            counts = np.unique(per_source)
-            counts = counts[counts != 0]
-            out.append(None if counts.size > MAX_FANOUT_GROUPS else
-                       tuple((int(c), per_source == c) for c in counts))
-        return tuple(out)
-
-
-def _target_index(
-    block_shape: tuple[int, ...], to_target: tuple[int, ...], n_out: int
-) -> np.ndarray | None:
-    """Flat target index of each ``(rep, out)`` block entry; None for the identity layout."""
-    if to_target == tuple(range(len(to_target))):
-        return None
-    size = prod(block_shape)
-    # the block transposed into target order, read in target (C) order, is block index by
-    # target position: invert it
-    block_of_target = np.arange(size).reshape(block_shape).transpose(to_target).reshape(-1)
-    index = np.empty(size, np.int64)
-    index[block_of_target] = np.arange(size)
-    return index.reshape(-1, n_out)

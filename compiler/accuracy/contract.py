@@ -53,21 +53,24 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
 from compiler.accuracy.metrics import FIRM_MARGIN_DB, decision_figures, value_figures
 from ir import Graph
+from ir.errors import CompileValidationError
 from ir.interpreter import evaluate
+from ir.model import CheckedModel
 from ir.ops import Input, Output
 
 __all__ = ["Contract", "StageCheck", "Tolerances", "firm_detections", "measure_contract",
            "split_folds"]
 
 
-class Tolerances(BaseModel):
+class Tolerances(CheckedModel):
     """What every spiking stage must keep (see the module docstring for each figure)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = CompileValidationError
     error_db_max: float = Field(-10.0, le=0, description="RMS error over the noise cells, dB "
                                                          "relative to the noise floor")
     lost_max: float = Field(0.01, ge=0, le=1, description="fraction of signal cells > 6 dB off")

@@ -19,12 +19,15 @@ True
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
+
+from ir.errors import CompileValidationError
+from ir.model import CheckedModel
 
 __all__ = ["EnergyFigures", "Figure"]
 
 
-class Figure(BaseModel):
+class Figure(CheckedModel):
     """A constant and its source.
 
     Parameters
@@ -37,6 +40,7 @@ class Figure(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    error_class = CompileValidationError
 
     value: float | None = Field(default=None, ge=0)
     source: str = Field(min_length=1)
@@ -47,7 +51,7 @@ class Figure(BaseModel):
         return self.value is not None
 
 
-class EnergyFigures(BaseModel):
+class EnergyFigures(CheckedModel):
     """A chip's energy per operation (each a :class:`Figure`; ``None``: not given).
 
     Parameters
@@ -63,6 +67,7 @@ class EnergyFigures(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = CompileValidationError
 
     synaptic_op_j: Figure | None = None
     neuron_update_j: Figure | None = None

@@ -62,13 +62,14 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
 from compiler.lowering.dft_common import op_weights
 from compiler.passes.base import CompileContext, Pass
 from compiler.program import CompiledProgram
 from ir import Graph
-from ir.errors import CompileError
+from ir.errors import CompileError, CompileValidationError
+from ir.model import CheckedModel
 from ir.ops import DFT, Add, Linear, Op, Sum, Window
 
 __all__ = ["StaticSplit", "StaticSplitOptions", "MODES"]
@@ -82,10 +83,11 @@ REPETITION_AXIS = "chirp"
 MODES = ("auto", "off")
 
 
-class StaticSplitOptions(BaseModel):
+class StaticSplitOptions(CheckedModel):
     """The pass's option, a typed field (``compile_graph(options={"static_split": ...})``)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = CompileValidationError
     static_split: Literal["auto", "off"] = Field("auto", description="auto or off")
 
 _LINEAR = (Window, DFT, Linear, Sum)

@@ -32,15 +32,19 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
+
+from ir.errors import NetworkValidationError
+from ir.model import CheckedModel
 
 __all__ = ["FrozenModel", "LatencyCode", "RateCode", "dither_offsets"]
 
 
-class FrozenModel(BaseModel):
+class FrozenModel(CheckedModel):
     """Base of the immutable port records: frozen, unknown fields refused."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = NetworkValidationError
 
 
 class LatencyCode(FrozenModel):

@@ -30,13 +30,14 @@ from dataclasses import dataclass, field
 from math import prod
 
 import networkx as nx
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import ConfigDict, Field, field_validator
 
 from compiler.snn.coding import N_PARTS, Decoder, Encoder
 from compiler.snn.neurons import NeuronParams
 from compiler.snn.projections import Projection
 from compiler.snn.resonator import N_COMPARTMENTS, ResonatorParams
-from ir.errors import NetworkError
+from ir.errors import NetworkError, NetworkValidationError
+from ir.model import CheckedModel
 
 __all__ = ["Population", "SpikingNetwork", "PART_AXIS"]
 
@@ -44,7 +45,7 @@ __all__ = ["Population", "SpikingNetwork", "PART_AXIS"]
 PART_AXIS = "part"
 
 
-class Population(BaseModel):
+class Population(CheckedModel):
     """A tensor of neurons with named axes (or of spike sources fed by an encoder).
 
     Parameters
@@ -63,6 +64,7 @@ class Population(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = NetworkValidationError
 
     id: str = Field(min_length=1)
     shape: dict[str, int]

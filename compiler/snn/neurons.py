@@ -49,7 +49,10 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_validator
+
+from ir.errors import NetworkValidationError
+from ir.model import CheckedModel
 
 __all__ = ["DECAY_ONE", "Phase", "NeuronParams", "ResetMode"]
 
@@ -59,7 +62,7 @@ DECAY_ONE = 4096
 ResetMode = Literal["value", "subtract", "fire_once"]
 
 
-class Phase(BaseModel):
+class Phase(CheckedModel):
     """One stage of a neuron population's schedule, from ``start_step`` until the next phase.
 
     Parameters
@@ -75,6 +78,7 @@ class Phase(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = NetworkValidationError
 
     start_step: int = Field(ge=0)
     bias: float = 0.0
@@ -89,7 +93,7 @@ class Phase(BaseModel):
         return value
 
 
-class NeuronParams(BaseModel):
+class NeuronParams(CheckedModel):
     """Parameters shared by every neuron of one population.
 
     Parameters
@@ -126,6 +130,7 @@ class NeuronParams(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = NetworkValidationError
 
     du: float = Field(default=1.0, ge=0.0, le=1.0)
     dv: float = Field(default=0.0, ge=0.0, le=1.0)

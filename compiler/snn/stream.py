@@ -28,7 +28,10 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
+
+from ir.errors import NetworkValidationError
+from ir.model import CheckedModel
 
 __all__ = ["BIT_AXIS", "StreamCode"]
 
@@ -36,7 +39,7 @@ __all__ = ["BIT_AXIS", "StreamCode"]
 BIT_AXIS = "bit"
 
 
-class StreamCode(BaseModel):
+class StreamCode(CheckedModel):
     """Binary bit-plane stream along one value axis (see the module docstring).
 
     Parameters
@@ -59,6 +62,7 @@ class StreamCode(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = NetworkValidationError
 
     type: Literal["stream"] = "stream"
     axis: str

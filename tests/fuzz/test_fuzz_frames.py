@@ -1,19 +1,20 @@
-"""Fuzz: large batches — per-event costs must not grow with the frame index, and the
-closed form's time must stay near the guard's estimate.
+"""Fuzz: large batches — far frames count like frame 0, and big closed-form batches run.
 
 Random CFAR networks (OS or CA, 1-D or 2-D maps, guard and training sizes, clipped or
 wrapped edges) are compiled once per example; then
 
 * every delivery's synaptic-event count of the same neurons in a far frame (up to frame
-  ``10^7``) equals frame 0's and costs what it costs there (``np.take(mode="wrap")`` once
-  looped over the frame index per event: a CFAR batch was quadratic in frames);
-* a closed-form run of up to 4 000 frames takes at most ten times the guard's estimate
-  (plus 0.1 s for the fixed per-call work), and the estimate at most ten times the run.
+  ``10^7``) equals frame 0's (``np.take(mode="wrap")`` once looped over the frame index per
+  event: a CFAR batch was quadratic in frames);
+* a closed-form run of up to 4 000 frames gives one map per frame, and the guard's estimate
+  of it is positive and finite.
+
+What those cost — the far count as cheap as frame 0's, the closed run within ten times the
+guard's estimate and the estimate within ten times the run — are speed claims, measured by
+``benchmarks/speed_claims.py`` (wall-clock bounds do not belong in tests).
 """
 
 from __future__ import annotations
-
-import time
 
 import numpy as np
 from fuzz_support import budget
@@ -64,14 +65,11 @@ def test_far_frames_and_large_batches(graph, frame, n_frames) -> None:
     note(f"{graph.to_dict()['nodes'][1]}, frame {frame}, {n_frames} frames")
     for dl in build_plan(net).deliveries.values():
         events = np.arange(dl.src_size).repeat(4)
-        start = time.perf_counter()
         far = dl.n_events(0, events + frame * dl.src_size)
-        assert time.perf_counter() - start < 0.5, f"{dl.id}: counting is slow at frame {frame}"
-        assert far == dl.n_events(0, events)
+        assert far == dl.n_events(0, events), f"{dl.id}: frame {frame} counts differently"
     x = np.random.default_rng(n_frames).exponential(size=(n_frames, *shape))
-    start = time.perf_counter()
-    simulate(net, {"rd": x}, mode="closed", out_of_range="clip")
-    measured = time.perf_counter() - start
+    result = simulate(net, {"rd": x}, mode="closed", out_of_range="clip")
+    assert result.mode == "closed"
+    assert [v.shape for v in result.outputs.values()] == [(n_frames, *shape)]
     estimate = estimate_simulation(net, n_frames, mode="closed").time_s
-    assert measured <= 10 * estimate + 0.1, f"{measured:.3f} s, estimated {estimate:.4f} s"
-    assert estimate <= 10 * measured, f"{measured:.3f} s, estimated {estimate:.4f} s"
+    assert 0 < estimate < float("inf")

@@ -1,17 +1,18 @@
 """Fuzz the readers of users' files and the sweep planner for amplification.
 
 Three classes, each with the contract of the suite (a correct result or a typed error naming
-the culprit) plus a bound on time and memory:
+the culprit) plus a bound on memory (what each costs in time is measured by
+``benchmarks/hostile_inputs.py``: wall-clock bounds do not belong in tests):
 
 * **bounded decompression for every reader** — one small bomb per reader (``.npz`` and
   ``.mat`` inputs, ``.npy`` inputs, TI ``.bin``, an artifact's ``arrays.npz``, classifier
   weights, a folder frame source), all read in one child interpreter under an
-  address-space cap: each must be refused in well under a second without reserving more
-  than the cap (they declare or inflate to 2-4 GiB from at most 4 MB); and hypothesis over
+  address-space cap: each must be refused without reserving more than the cap (they
+  declare or inflate to 2-4 GiB from at most 4 MB); and hypothesis over
   the bombs' declared sizes and shapes in-process, peak memory growth ≤ 256 MiB;
 * **grid and alias amplification in sweeps** — random grids (up to 40 axes of up to 12
   values), frame counts and alias fan-outs: parsing either refuses with a
-  ``CompileError`` or gives a spec whose points can be planned, within bounded time;
+  ``CompileError`` or gives a spec whose points can be planned, in bounded memory;
 * **hostile folder sources** — random patterns (hostile strings, globs, absolute and
   climbing paths) and folders holding FIFOs, sub-folders, forged headers, object arrays
   and damaged files.
@@ -21,16 +22,15 @@ from __future__ import annotations
 
 import json
 import os
-import time
 
 import numpy as np
 from bombs import (
     deflate_zeros,
     mat_bomb,
     mat_uncompressed_bomb,
-    mat_v4_bomb,
     npy_header,
     npz_bomb,
+    reader_bombs,
     zip_deflated,
 )
 from capped import run_capped
@@ -41,79 +41,22 @@ from hypothesis import strategies as st
 _GIB = 1 << 30
 
 
-def _cases(tmp) -> dict[str, tuple[str, str]]:
-    """Reader -> (the call, what its error must say), the bomb files written into ``tmp``."""
-    files = {
-        "in.npz": npz_bomb((int(3.9 * _GIB) // 8,)),
-        "lying.npz": zip_deflated("x.npy", deflate_zeros(3 * _GIB, raw=True, prefix=npy_header(
-            (2,))), len(npy_header((2,))) + 16),  # the zip entry says 16 bytes of data
-        "framed.npz": zip_deflated("x.npy", deflate_zeros(_GIB, raw=True, prefix=npy_header(
-            (int(4.1 * _GIB) // 32, 4))), 1 << 20),  # frames of the port, over 4 GiB
-        "data.mat": mat_bomb(int(3.9 * _GIB)),
-        "dims.mat": mat_bomb(0, dims_bytes=3 * _GIB),
-        "tag.mat": mat_uncompressed_bomb(4 * _GIB - 64),
-        "v4.mat": mat_v4_bomb(16_000, 16_000),
-        "in.npy": npy_header((10**12,)) + bytes(16),
-        "art.npz": npz_bomb((int(3.9 * _GIB) // 8,)),
-    }
-    for name, data in files.items():
-        (tmp / name).write_bytes(data)
-    with (tmp / "big.bin").open("wb") as f:
-        f.truncate(512 << 20)
-    (tmp / "frames").mkdir()
-    for i in range(2):
-        np.save(tmp / "frames" / f"f{i}.npy", np.zeros(4))
-    (tmp / "frames" / "f2.npy").write_bytes(npy_header((10**12,)) + bytes(16))
-    arrays = ("from radarsnn.cli.arrays import load_arrays; "
-              "load_arrays([{p!r}], ['x'], 'chain c', shapes={{'x': {port}}})")
-    return {
-        "npz input": (arrays.format(p=str(tmp / "in.npz"), port=(4,)),
-                      "but the port takes (4,)"),
-        "npz member inflating past its size": (
-            arrays.format(p=str(tmp / "lying.npz"), port=(4,)), "not a readable .npz archive"),
-        "npz framed input over 4 GiB": (arrays.format(p=str(tmp / "framed.npz"), port=(4,)),
-                                        "over the limit of 4294967296"),
-        "mat data element": (arrays.format(p=str(tmp / "data.mat"), port=(1,)),
-                             "inflates to more than"),
-        "mat dimensions": (arrays.format(p=str(tmp / "dims.mat"), port=(1,)),
-                           "not a readable .mat"),
-        "mat uncompressed tag": (arrays.format(p=str(tmp / "tag.mat"), port=(1,)),
-                                 "holds a data element of 4294967232 bytes"),
-        "mat v4 header": (arrays.format(p=str(tmp / "v4.mat"), port=(16_000, 16_000)),
-                          "but the file holds 30"),
-        "npy input": (arrays.format(p=str(tmp / "in.npy"), port=(4,)), "over the limit"),
-        "bin capture": ("from radarsnn.cli.arrays import load_arrays; load_arrays("
-                        f"[{str(tmp / 'big.bin')!r}], ['x'], 'c', bin_layout='samples=256,"
-                        "chirps=128,rx=4', shapes={'x': (4, 64, 256)})", "but the port takes"),
-        "artifact arrays.npz": ("from pathlib import Path; from backends.npz_reader import "
-                                f"read_npz; read_npz(Path({str(tmp / 'art.npz')!r})."
-                                "read_bytes(), Path('arrays.npz'))", "is compressed"),
-        "classifier weights": ("from ir.classifier_forward.weights import load_weights; "
-                               "from ir.ops.classify import Classifier; load_weights(Classifier."
-                               f"model_construct(weights={str(tmp / 'in.npz')!r}), (16, 16), "
-                               "'cls')", "over the limit"),
-        "folder frame": ("from radarsnn.sweep.frames import load_frames; from radarsnn.sweep."
-                         "sections import FolderFrames; load_frames(FolderFrames(source='folder', "
-                         f"path='frames'), {str(tmp)!r}, 0, 1, calibration=True)",
-                         "over the limit"),
-    }
-
-
-def test_every_reader_refuses_a_small_bomb_quickly_in_bounded_memory(tmp_path):
-    cases = _cases(tmp_path)
+def test_every_reader_refuses_a_small_bomb_in_bounded_memory(tmp_path):
+    # the time each refusal takes (well under a second) is measured by
+    # benchmarks/hostile_inputs.py; here the address-space cap is the check
+    cases = reader_bombs(tmp_path)
     body = """
-        import json, time
+        import json
         from ir.errors import RadarSNNError
         out = {}
         for name, code in json.loads(CASES).items():
-            start = time.perf_counter()
             try:
                 exec(code, {})
-                out[name] = ["read", "", 0.0]
+                out[name] = ["read", ""]
             except RadarSNNError as err:
-                out[name] = [type(err).__name__, str(err), time.perf_counter() - start]
+                out[name] = [type(err).__name__, str(err)]
             except BaseException as err:
-                out[name] = [type(err).__name__, str(err)[:300], time.perf_counter() - start]
+                out[name] = [type(err).__name__, str(err)[:300]]
         print(json.dumps(out))
         """.replace("CASES", repr(json.dumps({k: c for k, (c, _) in cases.items()})))
     done = run_capped("import numpy, scipy.io, radarsnn.cli.arrays, radarsnn.sweep.frames, "
@@ -121,11 +64,11 @@ def test_every_reader_refuses_a_small_bomb_quickly_in_bounded_memory(tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     results = json.loads(done.stdout.splitlines()[-1])
     for name, (_, why) in cases.items():
-        kind, text, seconds = results[name]
+        kind, text = results[name]
         assert kind in ("RadarConfigError", "RadarSNNError", "ArtifactError", "IRError"), (
             name, kind, text)
         assert why in text, (name, text)
-        assert "\n" not in text and seconds < 3.0, (name, seconds)
+        assert "\n" not in text, (name, text)
 
 
 _DECLARED = st.sampled_from([1 << 20, 64 << 20, _GIB, 3 * _GIB, int(3.9 * _GIB)])
@@ -156,11 +99,10 @@ def test_bombs_of_any_size_cost_what_the_port_takes(tmp_path_factory, declared, 
             "mat": lambda: mat_bomb(declared),
             "mat-tag": lambda: mat_uncompressed_bomb(declared)}[kind]()
     path.write_bytes(data)
-    start = time.perf_counter()
     got = bounded_outcome(lambda: load_arrays([str(path)], ["x"], "chain c",
                                               shapes={"x": port}), [str(path)],
                           max_growth=256 << 20)
-    assert got is None and time.perf_counter() - start < 2.0
+    assert got is None
 
 
 # -- sweeps: grids and aliases ---------------------------------------------------------------
@@ -190,10 +132,8 @@ def test_grids_and_aliases_are_refused_or_planned_in_bounded_time(lengths, n_fra
     spec = {"name": "t", "chains": {"a": _CHAIN}, "grid": grid,
             "options": {"input_bounds": {"x": [shared] * fan}},
             "frames": {"source": "scene", "n_frames": n_frames, "frames_per_cell": per_cell}}
-    start = time.perf_counter()
     parsed = bounded_outcome(lambda: parse_spec(spec), ["grid", "points", "cells", "bytes",
                                                         "aliases"])
-    assert time.perf_counter() - start < 2.0
     if parsed is not None:
         n_points = parsed.n_points()
         assert n_points <= MAX_SWEEP_POINTS
@@ -265,8 +205,6 @@ def test_hostile_folder_sources_are_typed_errors(tmp_path_factory, pattern, kind
         load_frames(source, tmp, 0, len(cal), calibration=True)
         return load_frames(source, tmp, 0, len(scored))
 
-    start = time.perf_counter()
     batch = bounded_outcome(use, culprits)
-    assert time.perf_counter() - start < 5.0
     if batch is not None:
         assert all(isinstance(a, np.ndarray) and a.dtype != object for a in batch.arrays)
