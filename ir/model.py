@@ -216,7 +216,14 @@ class CheckedModel(BaseModel):
 
     @classmethod
     def model_validate(cls, obj: Any, **kwargs: Any) -> Any:
-        """Pydantic's ``model_validate``, raising ``error_class`` like the constructor."""
+        """Pydantic's ``model_validate``, raising ``error_class`` like the constructor.
+
+        A mapping's non-string key (a YAML ``1: 1``) can name no field: it is passed on as
+        its text, so it is refused as an unknown field instead of a ``TypeError`` of the
+        keyword call.
+        """
+        if isinstance(obj, dict) and not all(isinstance(k, str) for k in obj):
+            obj = {k if isinstance(k, str) else str(k): v for k, v in obj.items()}
         try:
             return super().model_validate(obj, **kwargs)
         except ValidationError as err:

@@ -162,3 +162,16 @@ def test_a_validator_s_own_error_type_keeps_its_text():
         Gain(db=70.0)
     assert str(info.value) == "Gain: field 'db': 70.0 dB is over 60 dB (got 70.0)"
     assert info.value.errors(include_url=False)[0]["type"] == "too_loud"
+
+
+def test_a_hardware_profile_built_with_a_bad_value_raises_a_typed_error():
+    from compiler.hardware import load_profile
+    from compiler.hardware.profile import HardwareProfile
+    from ir.errors import CompileError, CompileValidationError
+
+    with pytest.raises(CompileError, match=r"HardwareProfile: field 'neurons_per_core'.*'many'"):
+        HardwareProfile(name="x", neurons_per_core="many")
+    with pytest.raises(CompileValidationError, match=r"state_bits.*greater than or equal"):
+        load_profile("loihi").model_copy(update={"state_bits": -3})
+    with pytest.raises(CompileValidationError, match=r"field '1'"):  # a YAML key 1: 1
+        HardwareProfile.model_validate({"name": "x", 1: 1})

@@ -20,7 +20,10 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, Strict
+from pydantic import ConfigDict, Field, Strict
+
+from ir.errors import CompileValidationError
+from ir.model import CheckedModel
 
 __all__ = ["NOMINAL_STATE_BITS", "NUMBER_FORMAT_FIELDS", "NumberFormat"]
 
@@ -33,7 +36,7 @@ _Bool = Annotated[bool, Strict()]  # not 1, not "yes"
 NOMINAL_STATE_BITS = 24
 
 
-class NumberFormat(BaseModel):
+class NumberFormat(CheckedModel):
     """How one target stores numbers (``None``: no limit, floating point).
 
     Parameters
@@ -71,6 +74,7 @@ class NumberFormat(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+    error_class = CompileValidationError
 
     weight_bits: _Width = Field(default=None, ge=2, le=64)
     threshold_bits: _Width = Field(default=None, ge=2, le=64)

@@ -24,7 +24,6 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import (
-    BaseModel,
     ConfigDict,
     Field,
     Strict,
@@ -35,7 +34,8 @@ from pydantic import (
 
 from compiler.hardware.figures import EnergyFigures
 from compiler.hardware.number_format import NUMBER_FORMAT_FIELDS, NumberFormat
-from ir.errors import BudgetError
+from ir.errors import BudgetError, CompileValidationError
+from ir.model import CheckedModel
 
 __all__ = ["BOARD_FIELDS", "BUDGETS", "BUILTIN_BOARDS", "BUILTIN_PROFILES", "FILE_FIELDS",
            "NO_TARGET", "OPTIONAL_FIELDS", "REQUIRED_FIELDS", "HardwareProfile"]
@@ -76,7 +76,7 @@ _Count = _Int | None
 _Bool = Annotated[bool, Strict()]  # not 1, not "yes"
 
 
-class HardwareProfile(BaseModel):
+class HardwareProfile(CheckedModel):
     """The budgets of one neuromorphic target (``None`` = unbounded).
 
     Parameters
@@ -135,6 +135,7 @@ class HardwareProfile(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    error_class = CompileValidationError
 
     name: str = Field(min_length=1)
     cores_per_chip: _Count = Field(default=None, ge=1)
