@@ -31,9 +31,10 @@ from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps
 from backends.reference.plan import SimPlan, closed_form_problems
-from backends.reference.resonator import ResonatorStepParams, solve_resonator
+from backends.reference.resonator import ResonatorStepParams
+from backends.reference.resonator_closed import solve_resonators
 from backends.reference.result import Activity
-from backends.reference.spans import Arrivals, charge, drive, driven, silent
+from backends.reference.spans import Arrivals, charge, driven, silent
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 
@@ -157,8 +158,7 @@ def _solve(
     dtype = np.int64 if plan.integer else np.float64
     u, v, first = np.zeros(n, dtype), np.zeros(n, dtype), np.full(n, -1, np.int64)
     if isinstance(params, ResonatorStepParams):
-        v = solve_resonator(params, lambda s0, s1: drive(arrivals, s0, s1, n_frames, pop.dims,
-                                                         dtype), n, first, charge)
+        v = solve_resonators(plan, pid, arrivals, n_frames, first)
     else:
         v = _solve_neurons(plan, pid, params, arrivals, spikes, n_frames, block_bytes, u, v,
                            first)
