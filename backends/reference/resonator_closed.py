@@ -45,7 +45,7 @@ from backends.reference.resonator_drive import fold, shared_drive
 from backends.reference.spans import charge, drive
 from compiler.snn.resonator import N_COMPARTMENTS
 
-__all__ = ["solve_resonators"]
+__all__ = ["solve_resonators", "replay_rows", "input_layout"]
 
 #: ``1 + 2^-51``: ``rint(u · _AWAY)`` rounds a multiple of ``2^-F`` half away from zero.
 _AWAY = 1.0 + 2.0 ** -51
@@ -78,14 +78,10 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
     def full(s0: int, s1: int) -> np.ndarray:
         return drive(arrivals, s0, s1, n_frames, pop.dims, dtype)
 
-    axis = plan.network.population[pid].params.axis
-    at = pop.axes.index(axis)
-    k = pop.dims[at]
-    lead, tail = int(np.prod(pop.dims[:at])), int(np.prod(pop.dims[at + 1:-1]))
+    (lead, k, tail), coefs = input_layout(plan, pid)
     shape = (n_frames * lead, k, tail)
     z = np.zeros(shape, np.complex128)
     v = np.zeros(n, dtype)
-    coefs = _coefficients(params, lead, k, tail)
     for seg in params.spans:
         if not seg.input_on:
             _, v = charge(v, first, seg, params)
@@ -100,10 +96,16 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
     return v
 
 
-def _coefficients(params: ResonatorStepParams, lead: int, k: int,
-                  tail: int) -> tuple[np.ndarray, np.ndarray | None]:
-    """``(a, a_end)`` per ``(K, P)`` (divided by ``2^F`` in fixed point; ``a_end`` None
-    without renormalisation)."""
+def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
+                                                  tuple[np.ndarray, np.ndarray | None]]:
+    """``((lead, K, P), (a, a_end))`` of resonator population ``pid``: one frame's state is
+    ``(lead, K, P)`` (the axes before the resonator axis, its bins, the axes after it but
+    ``part``); ``a`` and ``a_end`` are ``(K, P)`` complex, divided by ``2^F`` in fixed point
+    (``a_end`` None without renormalisation)."""
+    params = plan.neurons[pid]
+    pop = plan.populations[pid]
+    at = pop.axes.index(plan.network.population[pid].params.axis)
+    lead, k, tail = int(np.prod(pop.dims[:at])), pop.dims[at], int(np.prod(pop.dims[at + 1:-1]))
     scale = 2.0 ** -params.coef_bits
 
     def of(c, s):
@@ -111,7 +113,7 @@ def _coefficients(params: ResonatorStepParams, lead: int, k: int,
             lead, k, tail)[0].copy()
 
     end = of(params.cos_end, params.sin_end) if params.renorm is not None else None
-    return of(params.cos, params.sin), end
+    return (lead, k, tail), (of(params.cos, params.sin), end)
 
 
 def _full_blocks(full, seg, shape):
@@ -147,15 +149,32 @@ def _replay(z: np.ndarray, d: np.ndarray, s0: int, params: ResonatorStepParams,
             else np.zeros(m, bool))
     if not _exact(z, d, a, a_end, params.coef_bits):
         return _replay_steps(z, d, s0, params, coefs)
+    return replay_rows(z, a, m, d, a_end, ends)
+
+
+def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | None = None,
+                a_end: np.ndarray | None = None, ends: np.ndarray | None = None) -> np.ndarray:
+    """``n_steps`` fixed-point rotations of ``z`` (``(R, K, P)``, whole values) by ``a``
+    (``(K, P)``, already divided by ``2^F``), in row blocks that stay in the cache: per step
+    ``z ← rint((z + drive[j])·a·(1 + 2^-51))`` (``a_end`` where ``ends[j]``).  Exact only
+    where :func:`_exact` holds; :mod:`backends.reference.floor` times it without a drive.
+
+    Examples
+    --------
+    >>> z = np.array([[[3 + 0j]]])
+    >>> replay_rows(z, np.array([[0.5j]]), 2).tolist()  # 3 → 1.5i → 2i → −1
+    [[[(-1+0j)]]]
+    """
     out = np.empty_like(z)
     rows = max(1, _BLOCK_ENTRIES // (z.shape[1] * z.shape[2]))
     for r0 in range(0, z.shape[0], rows):
         block = z[r0:r0 + rows].copy()
         flat = block.view(np.float64)
-        part = d[:, r0:r0 + rows]
-        for j in range(m):
-            block += part[j]
-            block *= a_end if ends[j] else a
+        part = None if drive is None else drive[:, r0:r0 + rows]
+        for j in range(n_steps):
+            if part is not None:
+                block += part[j]
+            block *= a_end if ends is not None and ends[j] else a
             flat *= _AWAY
             np.rint(flat, out=flat)
         out[r0:r0 + rows] = block
