@@ -166,3 +166,33 @@ def test_rint_of_the_nudged_product_rounds_half_away_from_zero(bits):
     u = q * 2.0 ** -bits
     np.testing.assert_array_equal(np.rint(u * _AWAY), _shift(q, bits, True))
     np.testing.assert_array_equal(np.rint(u * _AWAY), _shift(q.astype(float), bits, False))
+
+
+@settings(max_examples=60, deadline=None)
+@given(length=st.integers(1, 9), inner=st.integers(1, 6), bits=st.integers(1, 16),
+       pre=st.integers(1, 4), frames=st.integers(1, 3), seed=st.integers(0, 2 ** 16),
+       gains=st.booleans())
+def test_bit_planes_are_the_bits_of_the_levels(length, inner, bits, pre, frames, seed, gains):
+    rng = np.random.default_rng(seed)
+    code = StreamCode(axis="n", length=length, inner=inner, bits=bits, x_max=1.0,
+                      gains=tuple(rng.uniform(0, 1.2, length)) if gains else ())
+    x = rng.uniform(0, 1.1, (frames, pre * length * inner))
+    g = np.asarray(code.gains) if gains else np.ones(length)
+    z = x.reshape(frames, pre, length, inner) * g[None, None, :, None]
+    q = code.levels(z)
+    want = np.zeros((length, frames, pre, bits, inner), bool)
+    for b in range(bits):  # plane n, neuron (frame, pre, bit, inner): bit b of the level
+        want[:, :, :, b, :] = np.moveaxis((q >> b) & 1, 2, 0) == 1
+    np.testing.assert_array_equal(code.bit_planes(x), want.reshape(length, -1))
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(1, 40), n_steps=st.integers(1, 12), seed=st.integers(0, 2 ** 16))
+def test_first_spike_steps_of_repeated_events_are_the_earliest(n, n_steps, seed):
+    from backends.reference.order import first_spike_steps
+
+    rng = np.random.default_rng(seed)
+    raster = rng.random((n_steps, n)) < rng.uniform(0.05, 0.9)
+    step, flat = np.nonzero(raster)  # ordered by step, then neuron
+    want = np.where(raster.any(axis=0), raster.argmax(axis=0), -1)
+    np.testing.assert_array_equal(first_spike_steps(flat, step, n), want)
