@@ -35,10 +35,10 @@ def _old_solve(plan, pid, arrivals, n_frames, first):
 
 
 def _network(k, q, bits, group, n_in, t_out, coef_bits, seed, renorm=0, per_bin=False,
-             frac=False, c_axis=2):
+             frac=False, c_axis=2, delay=0):
     """A stream source ``{c, bit, q, part: 2}`` fanned out to resonators ``{c, k, q, part}``
     through one projection per group of ``group`` bits (``per_bin``: a bin-dependent weight,
-    so no shared drive; ``frac``: fractional weights)."""
+    so no shared drive; ``frac``: fractional weights; ``delay``: the odd bits' synapses)."""
     rng = np.random.default_rng(seed)
     one = 2.0 ** coef_bits if coef_bits else 1.0
     theta = rng.uniform(-np.pi, np.pi, k)
@@ -64,7 +64,7 @@ def _network(k, q, bits, group, n_in, t_out, coef_bits, seed, renorm=0, per_bin=
         projections.append(MatrixProjection(
             id=f"w{g}", source="in", target="out", contract=("bit", "part"),
             produce=("k", "part"), rows=b * 2 + p, cols=kk * 4 + p, values=values,
-            n_in_out=(2 * bits, 4 * k)))
+            n_in_out=(2 * bits, 4 * k), delays=(b % 2) * delay if delay else None))
     code = StreamCode(axis="n", length=n_in, inner=2 * q, bits=bits, x_max=1.0)
     return SpikingNetwork(
         name="res", n_steps=n_in + t_out + 1,
@@ -86,7 +86,9 @@ def _runs(net, x, arith):
 
 
 def _assert_equal(a, b):
-    np.testing.assert_array_equal(a.first_spike_steps["out"], b.first_spike_steps["out"])
+    for pid in ("in", "out"):  # the stream source's raster bookkeeping too
+        np.testing.assert_array_equal(a.first_spike_steps[pid], b.first_spike_steps[pid])
+    assert a.spike_counts == b.spike_counts
     np.testing.assert_array_equal(a.outputs["v"], b.outputs["v"])
     assert a.synaptic_events == b.synaptic_events
 
@@ -96,11 +98,13 @@ def _assert_equal(a, b):
        group=st.integers(1, 8), n_in=st.integers(1, 24), t_out=st.integers(1, 8),
        frames=st.integers(1, 3), seed=st.integers(0, 2 ** 16),
        coef_bits=st.sampled_from([4, 8, 12, 16]), renorm=st.sampled_from([0, 0, 2, 3, 7]),
-       per_bin=st.booleans(), arith=st.sampled_from(["int64", "float64"]))
+       per_bin=st.booleans(), arith=st.sampled_from(["int64", "float64"]),
+       delay=st.sampled_from([0, 0, 1, 3]))
 def test_fixed_point_closed_form_is_the_step_engine(k, q, bits, group, n_in, t_out, frames,
-                                                    seed, coef_bits, renorm, per_bin, arith):
+                                                    seed, coef_bits, renorm, per_bin, arith,
+                                                    delay):
     net = _network(k, q, bits, group, n_in, t_out, coef_bits, seed, renorm=renorm,
-                   per_bin=per_bin)
+                   per_bin=per_bin, delay=delay)
     x = np.random.default_rng(seed + 1).uniform(-1, 1, (frames, 2, n_in, q))
     step, new, old = _runs(net, x, arith)
     _assert_equal(step, new)

@@ -26,7 +26,7 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import synapses_per_source
-from backends.reference.encoding import Train
+from backends.reference.encoding import StreamTrain, Train
 from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps
@@ -107,6 +107,9 @@ def run_closed(
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
             counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
+        elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
+            counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
+            first[pid] = fired.first_steps()
         else:
             flat, step = fired.events()
             counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
@@ -122,15 +125,22 @@ def run_closed(
 
 def _fired_of_train(train: Train, n_steps: int) -> Fired:
     """A source's spikes: the first-spike steps of an at-most-once train that has them
-    (:class:`~backends.reference.encoding.LatencyTrain`), else its events."""
+    (:class:`~backends.reference.encoding.LatencyTrain`), the raster of a stream train
+    (:class:`~backends.reference.encoding.StreamTrain`), else its events."""
     first = getattr(train, "first", None) if train.at_most_once else None
     if first is not None:  # a latency train carries its first-spike steps
         return Fired.of_first(first, n_steps)
+    if isinstance(train, StreamTrain):
+        return Fired.of_raster(train.planes, train.start, n_steps)
     return Fired.of_events(*train.all_events(), n_steps)
 
 
 def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
     """Synaptic events of delay class ``k``: the spikes arriving within the window."""
+    if fired.first is None and fired.raster is not None:  # spikes per source, then synapses
+        per_source = synapses_per_source(dl, k)
+        spiked = fired.counts_before(fired.n_steps - delay).reshape(-1, per_source.size)
+        return int(spiked.sum(axis=0) @ per_source)
     if fired.first is None:
         flat, step = fired.events()
         return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])

@@ -75,11 +75,15 @@ class SharedWeights:
     the delivery's permutation into target order.
     """
 
-    __slots__ = ("weights", "block", "to_target")
+    __slots__ = ("weights", "block", "to_target", "dense", "order")
 
     def __init__(self, weights: np.ndarray, block: tuple[int, ...],
-                 to_target: tuple[int, ...]) -> None:
+                 to_target: tuple[int, ...], dense: bool = False,
+                 order: np.ndarray | None = None) -> None:
         self.weights, self.block, self.to_target = weights, block, to_target
+        #: Every source neuron has its own (repetition, input row) slot: a raster's rows are
+        #: the count table, its columns taken in ``order`` (None: already in slot order).
+        self.dense, self.order = dense, order
 
 
 def _reduce(plan: SimPlan, dl, k: int, axis: str) -> SharedWeights | None:
@@ -105,7 +109,13 @@ def _reduce(plan: SimPlan, dl, k: int, axis: str) -> SharedWeights | None:
     if not whole and _fixed_point(plan, dl.target):
         return None  # fractional weights: the fixed-point rounding needs the step's sums
     block = (*dl.block_shape[:n_rep_axes], *(1 if i == at else s for i, s in enumerate(produce)))
-    return SharedWeights(np.ascontiguousarray(one.reshape(w.shape[0], -1)), block, dl.to_target)
+    slot = dl.rep_of * dl.n_in + dl.col_of
+    dense = slot.size == dl.n_reps * dl.n_in and np.bincount(slot).max(initial=0) <= 1
+    order = np.argsort(slot) if dense else None
+    if dense and np.array_equal(order, np.arange(slot.size)):
+        order = None
+    return SharedWeights(np.ascontiguousarray(one.reshape(w.shape[0], -1)), block, dl.to_target,
+                         dense, order)
 
 
 def _fixed_point(plan: SimPlan, pid: str) -> bool:
@@ -147,6 +157,9 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
     n_reps, n_in = prod(red.block) // red.weights.shape[1], dl.n_in
     per_step = n_frames * n_reps * n_in
     chunk = max(1, _COUNT_BYTES // (8 * per_step))
+    if red.dense and arr.fired.raster is not None:
+        _add_raster_drive(total, red, arr, n_frames, s0, s1, chunk)
+        return
     flat, arrive = arr.within(s0, s1)
     bounds = np.searchsorted(arrive, np.arange(s0, s1 + chunk, chunk))
     for c, t0 in enumerate(range(s0, s1, chunk)):
@@ -161,6 +174,26 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
         row *= n_in
         row += dl.col_of[i]
         counts = np.bincount(row, minlength=(t1 - t0) * per_step).reshape(-1, n_in)
+        current = (counts @ red.weights).reshape((t1 - t0) * n_frames, *red.block)
+        current = current.transpose(0, *(1 + a for a in red.to_target))
+        total[(t0 - s0) * n_frames:(t1 - s0) * n_frames] += current
+
+
+def _add_raster_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,
+                      s1: int, chunk: int) -> None:
+    """:func:`_add_drive` from a raster: its rows in slot order are the count table (the
+    events of one step are the row's set bits; a spike arriving at ``n_steps`` or later is
+    cut, as :class:`~backends.reference.spans.Arrivals` cuts it)."""
+    rows, start = arr.fired.raster
+    first = start + arr.delay  # the arrival step of row 0
+    lo, hi = max(s0, first), min(s1, first + len(rows), arr.n_steps)
+    n_in = arr.delivery.n_in
+    for t0 in range(lo, hi, chunk):
+        t1 = min(hi, t0 + chunk)
+        part = rows[t0 - first:t1 - first].reshape(t1 - t0, n_frames, -1)
+        if red.order is not None:
+            part = np.take(part, red.order, axis=2)
+        counts = part.reshape(-1, n_in).astype(np.float64)
         current = (counts @ red.weights).reshape((t1 - t0) * n_frames, *red.block)
         current = current.transpose(0, *(1 + a for a in red.to_target))
         total[(t0 - s0) * n_frames:(t1 - s0) * n_frames] += current
