@@ -116,8 +116,9 @@ def test_fixed_point_closed_form_is_the_step_engine(k, q, bits, group, n_in, t_o
        renorm=st.sampled_from([0, 3]), arith=st.sampled_from(["int64", "float64"]))
 def test_states_beyond_the_exact_float_replay_take_the_step_arithmetic(k, n_in, seed, renorm,
                                                                        arith):
-    # 30 fraction bits and 20-bit levels: |u| may pass 2^(49 − 30), so the replay falls back
-    net = _network(k, 1, 20, 20, n_in, 2, 30, seed, renorm=renorm)
+    # 30 fraction bits and 24-bit levels: |u| may pass 2^(49 − 30), so the replay falls back
+    # (and the drive's weights sum past 2^24: its product runs in float64)
+    net = _network(k, 1, 24, 24, n_in, 2, 30, seed, renorm=renorm)
     x = np.random.default_rng(seed).uniform(-1, 1, (2, 2, n_in, 1))
     with mock.patch.object(resonator_closed, "_replay_steps",
                            wraps=resonator_closed._replay_steps) as fallback:

@@ -46,7 +46,7 @@ class Fired:
     Build with :meth:`of_first` or :meth:`of_events`; ``first`` is None for the latter.
     """
 
-    __slots__ = ("first", "n_steps", "_events", "_mask", "raster")
+    __slots__ = ("first", "n_steps", "_events", "_mask", "raster", "_counts")
 
     def __init__(self, first: np.ndarray | None, n_steps: int,
                  events: tuple[np.ndarray, np.ndarray] | None = None,
@@ -55,6 +55,7 @@ class Fired:
         #: ``(rows, start)``: row ``r`` of the boolean ``rows`` holds the spikes of step
         #: ``start + r`` (a stream train's bit planes), or None.
         self.raster = raster
+        self._counts: dict[int, np.ndarray] = {}
 
     @classmethod
     def of_first(cls, first: np.ndarray, n_steps: int) -> Fired:
@@ -85,8 +86,11 @@ class Fired:
 
     def counts_before(self, stop: int) -> np.ndarray:
         """Spikes per neuron at steps below ``stop`` (int64; a raster only)."""
-        rows, start = self.raster
-        return np.count_nonzero(rows[:max(0, stop - start)], axis=0).astype(np.int64)
+        if stop not in self._counts:  # asked once per delay class and for the totals
+            rows, start = self.raster
+            self._counts[stop] = np.count_nonzero(rows[:max(0, stop - start)],
+                                                  axis=0).astype(np.int64)
+        return self._counts[stop]
 
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none (a raster only)."""

@@ -51,8 +51,9 @@ __all__ = ["solve_resonators", "replay_rows", "input_layout"]
 _AWAY = 1.0 + 2.0 ** -51
 #: Complex entries of one row block of the replay (about 512 kB: it stays in L2).
 _BLOCK_ENTRIES = 1 << 15
-#: Entries of one full drive histogram (a drive not shared along the bins).
-_FULL_ENTRIES = 1 << 22
+#: Resonators × steps of one full drive histogram (a drive not shared along the bins): its
+#: four compartments in float64 take 8 MiB.
+_FULL_ENTRIES = 1 << 18
 
 
 def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,

@@ -75,7 +75,7 @@ class SharedWeights:
     the delivery's permutation into target order.
     """
 
-    __slots__ = ("weights", "block", "to_target", "dense", "order")
+    __slots__ = ("weights", "block", "to_target", "dense", "order", "weights32")
 
     def __init__(self, weights: np.ndarray, block: tuple[int, ...],
                  to_target: tuple[int, ...], dense: bool = False,
@@ -84,6 +84,11 @@ class SharedWeights:
         #: Every source neuron has its own (repetition, input row) slot: a raster's rows are
         #: the count table, its columns taken in ``order`` (None: already in slot order).
         self.dense, self.order = dense, order
+        #: The weights in float32 where every sum of them is a whole number below 2^24 (exact
+        #: in single precision: half the bytes per count), else None.
+        whole = np.array_equal(weights, np.rint(weights))
+        small = np.abs(weights).sum(axis=0).max(initial=0.0) < 2.0 ** 24
+        self.weights32 = weights.astype(np.float32) if whole and small else None
 
 
 def _reduce(plan: SimPlan, dl, k: int, axis: str) -> SharedWeights | None:
@@ -193,8 +198,9 @@ def _add_raster_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int,
         part = rows[t0 - first:t1 - first].reshape(t1 - t0, n_frames, -1)
         if red.order is not None:
             part = np.take(part, red.order, axis=2)
-        counts = part.reshape(-1, n_in).astype(np.float64)
-        current = (counts @ red.weights).reshape((t1 - t0) * n_frames, *red.block)
+        w = red.weights if red.weights32 is None else red.weights32
+        counts = part.reshape(-1, n_in).astype(w.dtype)
+        current = (counts @ w).reshape((t1 - t0) * n_frames, *red.block)
         current = current.transpose(0, *(1 + a for a in red.to_target))
         total[(t0 - s0) * n_frames:(t1 - s0) * n_frames] += current
 

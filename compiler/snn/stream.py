@@ -97,7 +97,8 @@ class StreamCode(BaseModel):
         z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
         if self.gains:
             z = z * np.asarray(self.gains)[None, None, :, None]
-        q = np.ascontiguousarray(np.moveaxis(self.levels(z), 2, 0))  # L, f, pre, in
+        narrow = np.uint16 if self.bits <= 16 else np.uint32  # the levels' bits, less memory
+        q = np.moveaxis(self.levels(z), 2, 0).astype(narrow, order="C")  # L, f, pre, in
         planes = np.empty((self.length, *q.shape[1:3], self.bits, q.shape[3]), bool)
         bit = np.empty_like(q)
         for b in range(self.bits):  # one plane per bit, written in place: no int64 cube
