@@ -7,8 +7,9 @@ resonator and folds it to ``d = (I_0 − I_1) + i(I_2 − I_3)``
 bin through one fan-out synapse per bit and part, so the weight matrix of each
 projection is the same for every index of the resonator axis: the drive is then a
 function of the repetition alone, and the closed form computes it for one bin — a
-``(steps · frames · repetitions) × n_in`` count table (one ``bincount`` of the
-events) times the ``n_in × n_out / K`` slice of the weights — instead of the
+``(steps · frames · repetitions) × n_in`` count table (a stream train's raster rows as
+they are, else one ``bincount`` of the events) times the ``n_in × n_out / K`` slice of the
+weights (float32 where every sum is a whole number below ``2**24``) — instead of the
 ``K``-times larger histogram of every compartment.
 
 The sums are those of the step engine whenever they are exact: int64 arithmetic, or
