@@ -201,3 +201,21 @@ def test_first_spike_steps_of_repeated_events_are_the_earliest(n, n_steps, seed)
     step, flat = np.nonzero(raster)  # ordered by step, then neuron
     want = np.where(raster.any(axis=0), raster.argmax(axis=0), -1)
     np.testing.assert_array_equal(first_spike_steps(flat, step, n), want)
+
+
+@settings(max_examples=60, deadline=None)
+@given(rb=st.integers(1, 12), k=st.integers(1, 9), p=st.integers(1, 4),
+       shared=st.booleans(), seed=st.integers(0, 2 ** 16))
+def test_drive_added_by_rank_one_updates_is_the_plain_sum(rb, k, p, shared, seed):
+    from backends.reference.resonator_closed import _add_drive
+
+    rng = np.random.default_rng(seed)
+
+    def whole(*shape):
+        return rng.integers(-2 ** 40, 2 ** 40, shape) + 1j * rng.integers(-2 ** 40, 2 ** 40,
+                                                                          shape)
+
+    block, d = whole(rb, k, p), whole(rb, 1 if shared else k, p)
+    want = block + d
+    _add_drive(block, d, np.ones(k, np.complex128))
+    np.testing.assert_array_equal(block, want)

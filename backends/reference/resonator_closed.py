@@ -38,6 +38,7 @@ Examples
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg.blas import zgeru as _zgeru
 
 from backends.reference.plan import SimPlan
 from backends.reference.resonator import ResonatorStepParams, rotate
@@ -168,18 +169,35 @@ def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | 
     """
     out = np.empty_like(z)
     rows = max(1, _BLOCK_ENTRIES // (z.shape[1] * z.shape[2]))
+    ones = np.ones(max(z.shape[1], 1), np.complex128)
     for r0 in range(0, z.shape[0], rows):
         block = z[r0:r0 + rows].copy()
         flat = block.view(np.float64)
         part = None if drive is None else drive[:, r0:r0 + rows]
         for j in range(n_steps):
             if part is not None:
-                block += part[j]
+                _add_drive(block, part[j], ones)
             block *= a_end if ends is not None and ends[j] else a
             flat *= _AWAY
             np.rint(flat, out=flat)
         out[r0:r0 + rows] = block
     return out
+
+
+def _add_drive(block: np.ndarray, d: np.ndarray, ones: np.ndarray) -> None:
+    """``block += d`` in place (``(rb, K, P)`` and ``(rb, 1 | K, P)``): a drive shared along
+    the bins as rank-one updates (BLAS ``zgeru``: ``1·d`` is ``d``, the sums are the same
+    exact sums), which skip numpy's per-row broadcasting; else a plain ``+=``."""
+    rb, k, p = block.shape
+    if d.shape[1] != 1 or (p > 1 and rb > 8):
+        block += d
+        return
+    pairs = ([(block.reshape(rb, k).T, ones, d.reshape(rb))] if p == 1 else
+             [(block[r].T, d[r, 0], ones) for r in range(rb)])  # F-ordered views of block
+    for view, x, y in pairs:
+        res = _zgeru(1.0, x, y, a=view, overwrite_a=True)
+        if not np.shares_memory(res, view):  # pragma: no cover (scipy copied: write back)
+            view[...] = res
 
 
 def _exact(z, d, a, a_end, bits: int) -> bool:
