@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import time
 from unittest import mock
 
@@ -26,7 +27,6 @@ from backends.reference import program_plans, run_program
 from backends.reference.floor import floor_calls, rotation_floors
 from backends.reference.resonator import solve_resonator
 from backends.reference.spans import charge, drive
-from compiler.bench import interleaved_medians
 from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
 from radar.config import preset
@@ -40,6 +40,19 @@ def _previous(plan, pid, arrivals, n_frames, first):
     return solve_resonator(plan.neurons[pid],
                            lambda s0, s1: drive(arrivals, s0, s1, n_frames, pop.dims, dtype),
                            n_frames * pop.size, first, charge)
+
+
+def _in_turn(fns: dict, repeats: int) -> dict[str, float]:
+    """Median seconds of each of ``fns``, their calls taken in turn (after one warm-up each)."""
+    for fn in fns.values():
+        fn()
+    times: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return {name: statistics.median(ts) for name, ts in times.items()}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -67,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
                "before_plans": before,
                **{k: v for k, v in floor_calls([], rotations=rotation_floors(plans)).items()
                   if k == "floor"}}
-        s = interleaved_medians(fns, args.repeats)
+        s = _in_turn(fns, args.repeats)
         t0 = time.perf_counter()
         new = run_program(program, many, plans=plans, **kw)
         s["after_frames"] = time.perf_counter() - t0
