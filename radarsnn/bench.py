@@ -16,6 +16,12 @@ drift of the host's speed moves both alike): ``closed_over_floor`` says what the
 of the closed form (encoding, the analytic crossings, the CFAR, decoding) costs on top.  The
 load average (1, 5, 15 min) is read before and after the timings.
 
+``motif="resonator"`` (``radarsnn bench --motif resonator``) times the chain with
+``resonator`` range and Doppler DFTs instead (:data:`MOTIF_CHAINS`: compiled for
+``loihi2``, the chip's 12-bit fixed-point rotations, as the compiler's accuracy search picks
+them on hard scenes); its floor is the rotations every resonator must do per input step
+(:func:`backends.reference.floor.rotation_floors`).
+
 Examples
 --------
 >>> median_s(lambda: None, repeats=3) >= 0.0
@@ -33,7 +39,14 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
-__all__ = ["BenchReport", "chain_inputs", "interleaved_medians", "median_s", "run_bench"]
+__all__ = ["BenchReport", "MOTIF_CHAINS", "chain_inputs", "interleaved_medians", "median_s",
+           "run_bench"]
+
+#: ``--motif`` → (target, motifs) of the chain ``radarsnn bench`` builds instead of the
+#: default (unbounded target, default motifs).
+MOTIF_CHAINS: dict[str, tuple[str, dict[str, str]]] = {
+    "resonator": ("loihi2", {"dft": "resonator"}),
+}
 
 
 def median_s(fn: Callable[[], object], repeats: int = 5) -> float:
@@ -87,6 +100,8 @@ class BenchReport:
     load_after: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: The floor's products: ``"id (rows x n_in x n_out)"``.
     floor_products: list[str] = field(default_factory=list)
+    #: The DFT motif of the chain (``MOTIF_CHAINS``), "" for the default chain.
+    motif: str = ""
 
     @property
     def frames_per_s(self) -> dict[str, float]:
@@ -177,7 +192,8 @@ def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: Bench
 
 def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: int | None = None,
               threads: int = 1, modes: tuple[str, ...] = ("closed", "step"),
-              brian2: bool = True, progress=None, chain=None) -> BenchReport:
+              brian2: bool = True, progress=None, chain=None,
+              motif: str | None = None) -> BenchReport:
     """Time the conventional and the spiking chain of ``preset_name`` (see module docstring).
 
     Parameters
@@ -197,6 +213,9 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     chain : path, optional
         A chain file (YAML) to time instead of the preset's range-Doppler chain; its
         ``adc`` input is cut from the preset's frames (:func:`chain_inputs`).
+    motif : str, optional
+        A key of :data:`MOTIF_CHAINS`: compile the chain with that DFT motif and target
+        (Brian2 is then not timed: its range stage is the default chain's).
 
     Raises
     ------
@@ -206,7 +225,7 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     from threadpoolctl import threadpool_limits
 
     from backends.reference import program_plans, run_program
-    from backends.reference.floor import floor_calls, floor_products
+    from backends.reference.floor import floor_calls, floor_products, rotation_floors
     from compiler.chains import range_doppler_chain
     from compiler.compile import compile_graph
     from ir import Graph, evaluate
@@ -224,11 +243,13 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
                          machine=f"{platform.machine()} {platform.processor() or ''} "
                                  f"Python {platform.python_version()}".replace("  ", " "),
                          chain=graph.name if chain is not None else "", load_before=os.getloadavg())
-    program = compile_graph(graph, None, calibration_inputs={"adc": calibration})
+    program = (compile_graph(graph, None, calibration_inputs={"adc": calibration})
+               if motif is None else _motif_program(graph, motif, calibration, report))
     say("bench", "compiled")
     plans = program_plans(program)
-    products = floor_products(plans)
+    products, rotations = floor_products(plans), rotation_floors(plans)
     report.floor_products = [f"{p.id} ({' x '.join(map(str, p.shape))})" for p in products]
+    report.floor_products += [_rotation_text(r) for r in rotations]
     with threadpool_limits(limits=threads):
         report.seconds["conventional"] = median_s(lambda: evaluate(graph, {"adc": frame}),
                                                   repeats)
@@ -237,16 +258,39 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
             n = repeats if mode != "step" else (step_repeats or repeats)
             run = {mode: lambda m=mode: run_program(program, {"adc": frame}, mode=m,
                                                     plans=plans, out_of_range="clip")}
-            if mode == "closed" and products:  # the floor in turn with the closed form
-                run.update(floor_calls(products))
+            if mode == "closed" and (products or rotations):  # the floor in turn with it
+                run.update(floor_calls(products, rotations=rotations))
             report.seconds.update(interleaved_medians(run, n))
             say("bench", f"{mode} done")
         report.peak_rss_gb = _peak_rss_gb()
-        if brian2:
+        if brian2 and motif is None:
             _range_stage(config, frame, calibration, repeats, report)
     report.load_after = os.getloadavg()
     report.notes.append("simulator figures exclude compilation and plan building (done once)")
     return report
+
+
+def _motif_program(graph, motif: str, calibration, report: BenchReport):
+    """``graph`` compiled with ``MOTIF_CHAINS[motif]`` (no accuracy measurement: only the
+    simulator is timed); notes the choice in ``report``."""
+    from compiler.compile import compile_graph
+    from ir.errors import CompileError
+
+    if motif not in MOTIF_CHAINS:
+        raise CompileError(f"bench: motif {motif!r} is not one of {sorted(MOTIF_CHAINS)}")
+    target, motifs = MOTIF_CHAINS[motif]
+    report.motif = motif
+    report.chain = f"{report.chain or graph.name} ({motif} {', '.join(motifs)}, {target})"
+    report.notes.append(f"{motif} chain: compiled for {target} with motifs {motifs}; Brian2 "
+                        "is timed on the default chain's range stage only")
+    return compile_graph(graph, target, motifs=motifs, calibration_inputs={"adc": calibration},
+                         accuracy="off")
+
+
+def _rotation_text(r) -> str:
+    """``"id rotations (rows x K x P, steps steps, F-bit)"`` of a resonator floor."""
+    kind = f"{r.coef_bits}-bit rotations" if r.coef_bits else "power-table product"
+    return f"{r.id} {kind} ({' x '.join(map(str, r.shape[:3]))}, {r.n_steps} steps)"
 
 
 def chain_inputs(graph, frame):

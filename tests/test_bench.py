@@ -70,3 +70,25 @@ def test_bench_cli_json(capsys):
     assert doc["preset"] == "seed003" and "closed" in doc["frames_per_s"]
     assert {"floor", "floor_core"} <= set(doc["seconds"]) and "closed_over_floor" in doc["ratios"]
     assert len(doc["load_before"]) == 3 and doc["cpu_count"] >= 1
+
+
+def test_bench_motif_resonator_times_the_resonator_chain_against_its_rotations(capsys):
+    assert main(["bench", "--preset", "seed003", "--motif", "resonator", "--repeats", "1",
+                 "--mode", "closed", "--no-brian2", "--json", "-q"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["motif"] == "resonator" and "resonator" in doc["chain"]
+    assert set(doc["seconds"]) == {"conventional", "closed", "floor", "floor_core"}
+    assert doc["ratios"]["closed_over_floor"] > 0
+    # the floor is the fixed-point rotations of the range and Doppler resonators
+    assert [p.split()[0] for p in doc["floor_products"]] == ["rng__moving/out",
+                                                            "dop__moving/out"]
+    assert all("12-bit rotations" in p for p in doc["floor_products"])
+
+
+def test_bench_refuses_an_unknown_motif():
+    import pytest
+
+    from ir.errors import CompileError
+
+    with pytest.raises(CompileError, match="not one of"):
+        run_bench("seed003", repeats=1, modes=("closed",), brian2=False, motif="fft")

@@ -3,7 +3,8 @@
 Random OS-CFAR-like networks: a latency-coded source map (1-D or 2-D, axis order
 shuffled per population), fire-once IF targets (``du = 1, dv = 0``, no bias)
 fed by one excitatory one-to-one matrix (dense or sparse, some zero weights,
-any delay) and by inhibitory stencils (non-positive dyadic kernels, per-tap
+any delay; sometimes split over two projections, as a chip with narrow weights stores
+it) and by inhibitory stencils (non-positive dyadic kernels, per-tap
 delays, clip or wrap per axis).  The driven path is disabled while the closed
 form runs, so each example proves the gated solution itself.
 """
@@ -57,18 +58,21 @@ def _gated_network(seed: int, integer: bool) -> tuple[SpikingNetwork, dict[str, 
     n = int(np.prod(list(dims.values())))
     w = scale * rng.integers(0, 12, size=n).astype(np.float64)
     delay = int(rng.integers(0, 4))
-    if rng.random() < 0.5:
-        gate = MatrixProjection(id="cut", source="in", target="det", contract=names,
-                                produce=names, rows=np.arange(n), cols=np.arange(n), values=w,
-                                n_in_out=(n, n), delays=np.full(n, delay, np.int64))
-    else:
-        perm = rng.permutation(n)  # any one-to-one map, dense weights
-        dense = np.zeros((n, n))
-        dense[perm, np.arange(n)] = w
-        gate = MatrixProjection(id="cut", source="in", target="det", contract=names,
-                                produce=names, weights=dense,
-                                delays=np.full((n, n), delay, np.int64))
-    projs.insert(int(rng.integers(0, len(projs) + 1)), gate)
+    sparse, perm = rng.random() < 0.5, rng.permutation(n)  # any one-to-one map
+    parts = [w] if rng.random() < 0.6 else [w, scale * rng.integers(0, 5, size=n) * 1.0]
+    for i, wp in enumerate(parts):  # a split gate: its parts share the synapses' layout
+        if sparse:
+            gate = MatrixProjection(id=f"cut{i or ''}", source="in", target="det",
+                                    contract=names, produce=names, rows=np.arange(n),
+                                    cols=np.arange(n), values=wp, n_in_out=(n, n),
+                                    delays=np.full(n, delay, np.int64))
+        else:
+            dense = np.zeros((n, n))
+            dense[perm, np.arange(n)] = wp
+            gate = MatrixProjection(id=f"cut{i or ''}", source="in", target="det",
+                                    contract=names, produce=names, weights=dense,
+                                    delays=np.full((n, n), delay, np.int64))
+        projs.insert(int(rng.integers(0, len(projs) + 1)), gate)
     code = LatencyCode(kind=str(rng.choice(["linear", "log"])), t_max=n_steps,
                        x_min=0.1, x_max=1.0)
     net = SpikingNetwork(
@@ -168,6 +172,21 @@ def test_not_gated_falls_back_to_the_driven_path(cut, kernel) -> None:
     x = {"x": np.array([0.9, 0.5, 0.8, 0.2, 0.7])}
     np.testing.assert_array_equal(simulate(net, x, mode="step").first_spike_steps["det"],
                                   simulate(net, x, mode="closed").first_spike_steps["det"])
+
+
+def test_a_split_gate_reaching_a_target_from_two_sources_is_not_gated() -> None:
+    x = {"x": np.array([0.9, 0.5, 0.8, 0.2, 0.7])}
+    for second, gated in ((np.roll(np.eye(5), 1, axis=0), False), (0.5 * np.eye(5), True)):
+        net = _os_net(np.eye(5), np.array([-1.0, 0.0, -1.0]))
+        net = SpikingNetwork(name="os", n_steps=net.n_steps, populations=net.populations,
+                             encoders=net.encoders, projections=[*net.projections,
+                             MatrixProjection(id="cut1", source="in", target="det",
+                                              contract=("r",), produce=("r",),
+                                              weights=second)])
+        gates = build_plan(net).gates
+        assert ("det" in gates) == gated and (not gated or gates["det"].split == ("cut1",))
+        np.testing.assert_array_equal(simulate(net, x, mode="step").first_spike_steps["det"],
+                                      simulate(net, x, mode="closed").first_spike_steps["det"])
 
 
 @settings(max_examples=60, deadline=None)

@@ -26,14 +26,15 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import synapses_per_source
-from backends.reference.encoding import Train
+from backends.reference.encoding import StreamTrain, Train
 from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps
 from backends.reference.plan import SimPlan, closed_form_problems
-from backends.reference.resonator import ResonatorStepParams, solve_resonator
+from backends.reference.resonator import ResonatorStepParams
+from backends.reference.resonator_closed import solve_resonators
 from backends.reference.result import Activity
-from backends.reference.spans import Arrivals, charge, drive, driven, silent
+from backends.reference.spans import Arrivals, charge, driven, silent
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 
@@ -106,6 +107,9 @@ def run_closed(
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
             counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
+        elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
+            counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
+            first[pid] = fired.first_steps()
         else:
             flat, step = fired.events()
             counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
@@ -121,15 +125,22 @@ def run_closed(
 
 def _fired_of_train(train: Train, n_steps: int) -> Fired:
     """A source's spikes: the first-spike steps of an at-most-once train that has them
-    (:class:`~backends.reference.encoding.LatencyTrain`), else its events."""
+    (:class:`~backends.reference.encoding.LatencyTrain`), the raster of a stream train
+    (:class:`~backends.reference.encoding.StreamTrain`), else its events."""
     first = getattr(train, "first", None) if train.at_most_once else None
     if first is not None:  # a latency train carries its first-spike steps
         return Fired.of_first(first, n_steps)
+    if isinstance(train, StreamTrain):
+        return Fired.of_raster(train.planes, train.start, n_steps)
     return Fired.of_events(*train.all_events(), n_steps)
 
 
 def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
     """Synaptic events of delay class ``k``: the spikes arriving within the window."""
+    if fired.first is None and fired.raster is not None:  # spikes per source, then synapses
+        per_source = synapses_per_source(dl, k)
+        spiked = fired.counts_before(fired.n_steps - delay).reshape(-1, per_source.size)
+        return int(spiked.sum(axis=0) @ per_source)
     if fired.first is None:
         flat, step = fired.events()
         return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])
@@ -157,8 +168,7 @@ def _solve(
     dtype = np.int64 if plan.integer else np.float64
     u, v, first = np.zeros(n, dtype), np.zeros(n, dtype), np.full(n, -1, np.int64)
     if isinstance(params, ResonatorStepParams):
-        v = solve_resonator(params, lambda s0, s1: drive(arrivals, s0, s1, n_frames, pop.dims,
-                                                         dtype), n, first, charge)
+        v = solve_resonators(plan, pid, arrivals, n_frames, first)
     else:
         v = _solve_neurons(plan, pid, params, arrivals, spikes, n_frames, block_bytes, u, v,
                            first)

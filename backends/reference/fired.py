@@ -2,6 +2,7 @@ r"""The spikes of one population as the closed form hands them on: first-spike s
 
 A population whose neurons spike at most once (fire-once neurons, latency trains) is
 kept as its *first-spike steps* ``first`` (flat over ``(frames, size)``, ``-1``: none);
+a stream train as its dense *raster* (one boolean row per step, from step ``start``);
 any other as *events* ``(flat, step)``, ordered by step and, within a step, by neuron.
 The events of a first-spike record are built once, when something asks for them, so a
 consumer that can work from ``first`` directly — the silent span's arrival features —
@@ -25,6 +26,9 @@ Examples
 [[2, 0, 3], [0, 2, 2]]
 >>> f.arrival_features(delay=1, start=1, stop=4, weighted=True).tolist()
 [1.0, 0.0, 3.0, 1.0]
+>>> r = Fired.of_raster(np.array([[0, 1, 1], [1, 1, 0]], bool), start=2, n_steps=4)
+>>> [a.tolist() for a in r.events()], r.first_steps().tolist(), r.counts_before(3).tolist()
+([[1, 2, 0, 1], [2, 2, 3, 3]], [3, 2, 2], [0, 1, 1])
 """
 
 from __future__ import annotations
@@ -42,11 +46,16 @@ class Fired:
     Build with :meth:`of_first` or :meth:`of_events`; ``first`` is None for the latter.
     """
 
-    __slots__ = ("first", "n_steps", "_events", "_mask")
+    __slots__ = ("first", "n_steps", "_events", "_mask", "raster", "_counts")
 
     def __init__(self, first: np.ndarray | None, n_steps: int,
-                 events: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+                 events: tuple[np.ndarray, np.ndarray] | None = None,
+                 raster: tuple[np.ndarray, int] | None = None) -> None:
         self.first, self.n_steps, self._events, self._mask = first, n_steps, events, None
+        #: ``(rows, start)``: row ``r`` of the boolean ``rows`` holds the spikes of step
+        #: ``start + r`` (a stream train's bit planes), or None.
+        self.raster = raster
+        self._counts: dict[int, np.ndarray] = {}
 
     @classmethod
     def of_first(cls, first: np.ndarray, n_steps: int) -> Fired:
@@ -58,11 +67,41 @@ class Fired:
         """Events ``(flat, step)`` already ordered by step (ties by neuron)."""
         return cls(None, n_steps, (flat, step))
 
+    @classmethod
+    def of_raster(cls, rows: np.ndarray, start: int, n_steps: int) -> Fired:
+        """Spikes as boolean ``rows`` (steps × neurons) from step ``start``, within
+        ``n_steps``; the events are built only if something asks for them."""
+        return cls(None, n_steps, raster=(rows, start))
+
     def events(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(flat, step)`` ordered by step, ties by neuron (built once from ``first``)."""
+        """``(flat, step)`` ordered by step, ties by neuron (built once from ``first`` or
+        the raster)."""
+        if self._events is None and self.raster is not None:
+            rows, start = self.raster
+            step, flat = np.nonzero(rows)
+            self._events = flat.astype(np.int64), (step + start).astype(np.int64)
         if self._events is None:
             self._events = events_of_first(self.first, self.n_steps)
         return self._events
+
+    def counts_before(self, stop: int) -> np.ndarray:
+        """Spikes per neuron at steps below ``stop`` (int64; a raster only)."""
+        if stop not in self._counts:  # asked once per delay class and for the totals
+            rows, start = self.raster
+            self._counts[stop] = np.count_nonzero(rows[:max(0, stop - start)],
+                                                  axis=0).astype(np.int64)
+        return self._counts[stop]
+
+    def first_steps(self) -> np.ndarray:
+        """First spike step per neuron, ``-1``: none (a raster only)."""
+        rows, start = self.raster
+        first = np.full(rows.shape[1], -1, np.int64)
+        todo, new = np.ones(rows.shape[1], bool), np.empty(rows.shape[1], bool)
+        for r, row in enumerate(rows):  # row passes (an argmax down the columns is slower)
+            np.logical_and(row, todo, out=new)
+            first[new] = start + r
+            todo &= ~row
+        return first
 
     def arrival_features(self, delay: int, start: int, stop: int, weighted: bool) -> np.ndarray:
         """Per neuron (float64): ``stop − a`` (weighted) or 1 for an arrival ``a`` in the

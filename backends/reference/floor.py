@@ -13,6 +13,16 @@ int64 (numpy's own loop).  ``floor_core`` times the smaller products through
 the sign-symmetric cores the closed form actually multiplies
 (:mod:`backends.reference.signed_factor`), for reference.
 
+A resonator population (:mod:`backends.reference.resonator_closed`) has no such
+product in fixed point: every input step rounds, so a frame needs ``m`` rotations of
+every resonator — ``m`` complex multiplies and roundings of the ``(rows, K, P)`` state
+(``rows``: frames × repetitions), each unavoidable.  Its floor (:func:`rotation_floors`)
+is exactly those rotations, in the closed form's own row blocks (the same numpy
+operations, :func:`~backends.reference.resonator_closed.replay_rows`) with no drive,
+read-out or encoding.  In floating point the span is linear and its floor is the one
+product the closed form applies, the drive ``(rows · P) × m`` times the power table
+``m × K`` (complex).
+
 Examples
 --------
 >>> import numpy as np
@@ -45,8 +55,11 @@ import scipy.sparse as sp
 
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
+from backends.reference.resonator import ResonatorStepParams
+from backends.reference.resonator_closed import input_layout, replay_rows
 
-__all__ = ["FloorProduct", "floor_calls", "floor_products"]
+__all__ = ["FloorProduct", "RotationFloor", "floor_calls", "floor_products",
+           "rotation_floors"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,8 +112,74 @@ def _features(rows: int, cols: int, n_steps: int, dtype, seed: int) -> np.ndarra
     return rng.integers(0, n_steps + 1, size=(rows, cols)).astype(dtype)
 
 
-def floor_calls(products: list[FloorProduct], seed: int = 0) -> dict[str, Callable[[], None]]:
-    """``{"floor": run, "floor_core": run}``: each call does all the dense products (or cores).
+@dataclass(frozen=True, eq=False)
+class RotationFloor:
+    """The rotations of one resonator population per batch: ``n_steps`` input steps of a
+    ``(rows, K, P)`` state; ``coef`` is ``a`` per ``(K, P)`` (over ``2^F`` in fixed point)."""
+
+    id: str
+    coef: np.ndarray
+    rows: int
+    n_steps: int
+    coef_bits: int
+
+    @property
+    def shape(self) -> tuple[int, int, int, int]:
+        """``(rows, K, P, steps)``."""
+        return (self.rows, *self.coef.shape, self.n_steps)
+
+    @property
+    def multiply_adds(self) -> int:
+        """Complex multiplies (one per resonator and step)."""
+        return self.rows * self.coef.size * self.n_steps
+
+    def call(self, seed: int = 0) -> Callable[[], None]:
+        """One batch's rotations (fixed point) or power-table product (float), operands
+        built here, once."""
+        rng = np.random.default_rng(seed)
+        k, p = self.coef.shape
+        if self.coef_bits:  # whole states well inside the exact range (about 2^20)
+            z = (rng.integers(-(1 << 20), 1 << 20, (self.rows, k, p))
+                 + 1j * rng.integers(-(1 << 20), 1 << 20, (self.rows, k, p)))
+            return lambda: replay_rows(z, self.coef, self.n_steps)
+        drive = rng.standard_normal((p, self.rows, self.n_steps)) + 0j
+        table = rng.standard_normal((p, self.n_steps, k)) + 0j
+        return lambda: np.matmul(drive, table)
+
+
+def rotation_floors(plans: list[SimPlan], n_frames: int = 1) -> list[RotationFloor]:
+    """The rotations of every resonator population with input steps, per plan.
+
+    Examples
+    --------
+    >>> from compiler.snn import Population, SpikingNetwork
+    >>> from compiler.snn.resonator import Phase, ResonatorParams
+    >>> from backends.reference import build_plan
+    >>> net = SpikingNetwork(name="n", n_steps=6, populations=[
+    ...     Population(id="r", shape={"c": 3, "k": 2, "part": 4}, params=ResonatorParams(
+    ...         axis="k", cos=(4096.0, 0.0), sin=(0.0, 4096.0), coef_bits=12,
+    ...         phases=(Phase(start_step=0, spiking_on=False),
+    ...                 Phase(start_step=4, input_on=False))))])
+    >>> [(f.id, f.shape) for f in rotation_floors([build_plan(net)], n_frames=2)]
+    [('r', (6, 2, 1, 4))]
+    >>> floor_calls([], rotations=rotation_floors([build_plan(net)]))["floor"]()
+    """
+    out = []
+    for plan in plans:
+        for pid, params in plan.neurons.items():
+            if not isinstance(params, ResonatorStepParams):
+                continue
+            steps = sum(s.stop - s.start for s in params.spans if s.input_on)
+            if steps:
+                (lead, _, _), (coef, _) = input_layout(plan, pid)
+                out.append(RotationFloor(pid, coef, n_frames * lead, steps, params.coef_bits))
+    return out
+
+
+def floor_calls(products: list[FloorProduct], seed: int = 0,
+                rotations: list[RotationFloor] = ()) -> dict[str, Callable[[], None]]:
+    """``{"floor": run, "floor_core": run}``: each call does all the dense products (or cores)
+    and the resonators' ``rotations``.
 
     The operands are built once, here; a call is the products alone, one after the
     other (what ``radarsnn bench`` times, in turn with the closed form's runs).
@@ -110,12 +189,14 @@ def floor_calls(products: list[FloorProduct], seed: int = 0) -> dict[str, Callab
     cores = [(_features(p.rows, (p.core if p.core is not None else p.weights).shape[0],
                         p.n_steps, p.weights.dtype, seed + i),
               p.core if p.core is not None else p.weights) for i, p in enumerate(products)]
+    turns = [r.call(seed + i) for i, r in enumerate(rotations)]
 
     def run(pairs) -> Callable[[], None]:
         def products_once() -> None:
             for x, w in pairs:
                 x @ w
+            for turn in turns:
+                turn()
         return products_once
 
     return {"floor": run(dense), "floor_core": run(cores)}
-

@@ -6,7 +6,10 @@ spiking on) and their inputs are
 
 * one :class:`~backends.reference.matrix.MatrixDelivery` of one delay class
   whose weights are non-negative with at most one non-zero per target column
-  (the *gate*: at most one excitatory synapse per neuron), and
+  (the *gate*: at most one excitatory synapse per neuron) — or several from the
+  same source with the same delay and layout whose non-zeros together still
+  leave each target one source (a weight *split* over projections, as a chip
+  with narrow weights stores a large one), and
 * any number of :class:`~backends.reference.stencil.StencilDelivery` with
   non-positive kernels (inhibition),
 
@@ -54,6 +57,8 @@ class GateInputs:
 
     gate: str
     stencils: tuple[str, ...]
+    #: Further parts of a split gate (same source, delay and layout as ``gate``).
+    split: tuple[str, ...] = ()
 
 
 def _one_excitatory_per_target(weights) -> bool:
@@ -88,19 +93,44 @@ def gate_inputs(deliveries: Mapping[str, object], incoming: Sequence[str]) -> Ga
     ...   encoders=[Encoder(port="x", population="in",
     ...                     code=LatencyCode(t_max=8, x_min=0.0, x_max=1.0))])
     >>> build_plan(net).gates["det"]
-    GateInputs(gate='cut', stencils=('train',))
+    GateInputs(gate='cut', stencils=('train',), split=())
     """
-    gate, stencils = None, []
+    gates, stencils = [], []
     for qid in incoming:
         dl = deliveries[qid]
         if isinstance(dl, StencilDelivery) and all((w <= 0).all() for w in dl.tap_weights):
             stencils.append(qid)
-        elif (isinstance(dl, MatrixDelivery) and gate is None and len(dl.delays) == 1
+        elif (isinstance(dl, MatrixDelivery) and len(dl.delays) == 1
               and _one_excitatory_per_target(dl.weights[0])):
-            gate = qid
+            gates.append(qid)
         else:
             return None
-    return None if gate is None else GateInputs(gate, tuple(stencils))
+    # a part without a non-zero weight delivers nothing: it is no part of the gate
+    live = [q for q in gates if _any_nonzero(deliveries[q].weights[0])] or gates[:1]
+    if not live or not _one_split_gate([deliveries[q] for q in live]):
+        return None
+    return GateInputs(live[0], tuple(stencils), tuple(live[1:]))
+
+
+def _any_nonzero(weights) -> bool:
+    return bool((weights.data if sp.issparse(weights) else weights).any())
+
+
+def _one_split_gate(parts: list[MatrixDelivery]) -> bool:
+    """Whether the gate matrices are one gate split over projections: the same source,
+    delay and layout, and still one excitatory source per target together."""
+    first = parts[0]
+    if len(parts) == 1:
+        return True
+    for dl in parts[1:]:
+        if (dl.source != first.source or dl.delays != first.delays
+                or dl.weights[0].shape != first.weights[0].shape
+                or dl.block_shape != first.block_shape or dl.to_target != first.to_target
+                or not np.array_equal(dl.rep_of, first.rep_of)
+                or not np.array_equal(dl.col_of, first.col_of)):
+            return False
+    union = sum(sp.csr_matrix(dl.weights[0]) for dl in parts)  # non-negative: no cancelling
+    return _one_excitatory_per_target(union)
 
 
 def is_gated_span(seg: PhaseSpan, params: StepParams) -> bool:
@@ -172,8 +202,10 @@ def solve_gated(
     pop = plan.populations[pid]
     shape = (n_frames, *pop.dims)
     dtype = v.dtype
-    # the gate: per target, its weight (0 = no spike in the span) and its arrival step
-    dl = plan.deliveries[gates.gate]
+    # the gate: per target, its weight (0 = no spike in the span) and its arrival step; a
+    # split gate's parts reach each target from the same source, so their sums do too
+    parts = [plan.deliveries[q] for q in (gates.gate, *gates.split)]
+    dl = parts[0]
     flat, step = spikes[dl.source].events()
     arrive = step + dl.delays[0]
     keep = (arrive >= s0) & (arrive < s1)
@@ -181,9 +213,12 @@ def solve_gated(
     if not _single(flat, n_frames * dl.src_size):
         return None
     values = (np.ones(flat.size, dtype), arrive.astype(dtype))
-    currents = _one_source_currents(dl, flat, values, n_frames) or [
-        dl.current(0, flat, n_frames, values=x) for x in values]
-    w_gate, w_arrive = (c.reshape(-1) for c in currents)
+    sums = None
+    for part in parts:
+        currents = [c.reshape(-1) for c in _one_source_currents(part, flat, values, n_frames)
+                    or [part.current(0, flat, n_frames, values=x) for x in values]]
+        sums = currents if sums is None else [a + b for a, b in zip(sums, currents, strict=True)]
+    w_gate, w_arrive = sums
     open_ = w_gate > 0
     when = np.full(w_gate.size, -1, np.int64)
     when[open_] = np.rint(w_arrive[open_] / w_gate[open_]).astype(np.int64)
@@ -193,7 +228,8 @@ def solve_gated(
     u_end = np.zeros(v.shape, v.dtype)
     if need_u:
         last = arrive == s1 - 1
-        u_end += dl.current(0, flat[last], n_frames).reshape(-1)
+        for part in parts:
+            u_end += part.current(0, flat[last], n_frames).reshape(-1)
     for qid in gates.stencils:
         st = plan.deliveries[qid]
         flat_s, step_s = spikes[st.source].events()

@@ -52,6 +52,9 @@ def first_spike_steps(flat: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
     if np.bincount(flat, minlength=n).max() <= 1:  # at most one spike each (fire-once)
         first[flat] = step
         return first
-    once, at = np.unique(flat, return_index=True)
-    first[once] = step[at]
-    return first
+    # the earliest step of each neuron: one unbuffered minimum per event (no sort); the
+    # events are ordered by step, so this is the step of each neuron's first event
+    big = np.iinfo(np.int64).max
+    earliest = np.full(n, big, np.int64)
+    np.minimum.at(earliest, flat, step)
+    return np.where(earliest == big, -1, earliest)

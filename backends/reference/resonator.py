@@ -18,9 +18,12 @@ Per step, with ``d`` the summed input folded from the four compartments
 with ``a^m = ρ^m e^{imθ}`` evaluated directly (no repeated products); the charging
 stage uses the ramp neurons' analytic crossing
 (:func:`backends.reference.spans.charge`).  In fixed point (``coef_bits > 0``) the
-rounding makes the recurrence non-linear: the closed form then replays the step
-arithmetic over the drive histogram (bit-identical).  In floating point the two
-engines agree to rounding (``tests/test_resonator_sim.py``).
+rounding makes the recurrence non-linear and the steps are replayed.  The closed form of
+``run_closed`` is :mod:`backends.reference.resonator_closed` (every resonator, repetition
+and frame at once, bit-identical to the step engine in fixed point);
+:func:`solve_resonator` here is the plain one over the full drive histogram, kept as its
+reference.  In floating point the engines agree to rounding
+(``tests/test_resonator_sim.py``).
 
 Examples
 --------
@@ -220,7 +223,8 @@ class LiveResonators:
 
 def solve_resonator(params: ResonatorStepParams, drive_of, n: int, first: np.ndarray,
                     charge) -> np.ndarray:
-    """The closed form of one population: end membranes; fills ``first`` (spike steps).
+    """The plain closed form of one population (the reference of
+    :mod:`backends.reference.resonator_closed`): end membranes; fills ``first``.
 
     Parameters
     ----------

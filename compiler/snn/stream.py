@@ -101,7 +101,11 @@ class StreamCode(CheckedModel):
         z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
         if self.gains:
             z = z * np.asarray(self.gains)[None, None, :, None]
-        q = self.levels(z)
-        b = np.arange(self.bits, dtype=np.int64)
-        planes = (q[:, :, :, None, :] >> b[None, None, None, :, None]) & 1  # f, pre, L, B, in
-        return np.moveaxis(planes, 2, 0).reshape(self.length, -1).astype(bool)
+        narrow = np.uint16 if self.bits <= 16 else np.uint32  # the levels' bits, less memory
+        q = np.moveaxis(self.levels(z), 2, 0).astype(narrow, order="C")  # L, f, pre, in
+        planes = np.empty((self.length, *q.shape[1:3], self.bits, q.shape[3]), bool)
+        bit = np.empty_like(q)
+        for b in range(self.bits):  # one plane per bit, written in place: no int64 cube
+            np.bitwise_and(q, 1 << b, out=bit)
+            np.not_equal(bit, 0, out=planes[:, :, :, b, :])
+        return planes.reshape(self.length, -1)

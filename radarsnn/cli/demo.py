@@ -39,7 +39,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     try:
         report = run_bench(args.preset, repeats=args.repeats, step_repeats=args.step_repeats,
                            threads=args.threads, modes=tuple(args.mode or ("closed", "step")),
-                           brian2=not args.no_brian2, progress=progress, chain=args.chain)
+                           brian2=not args.no_brian2, progress=progress, chain=args.chain,
+                           motif=args.motif)
     finally:
         getattr(progress, "close", lambda: None)()
     print(json.dumps(report.to_dict(), indent=2, sort_keys=True) if args.json
@@ -77,6 +78,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--chain", type=Path, metavar="YAML",
                    help="time this chain file instead of the preset's range-Doppler chain "
                         "(its adc input cut from the preset's frames)")
+    p.add_argument("--motif", choices=["resonator"],
+                   help="time the chain with this DFT motif instead (resonator: loihi2's "
+                        "fixed-point resonators; its floor is their rotations)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_bench)
