@@ -39,7 +39,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import ValidationError
+# pydantic re-exports this class; pydantic_core alone keeps `radarsnn --version` light
+from pydantic_core import ValidationError
 
 __all__ = [
     "RadarSNNError",
