@@ -21,12 +21,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY
 from ir.errors import SimulationError
 from ir.limits import check_limit
 
-__all__ = ["ARITHMETICS", "MODES", "RunOptions"]
+__all__ = ["ARITHMETICS", "MODES", "RunOptions", "check_workers"]
 
 #: The engines (``auto``: closed form where the network is eligible, else step).
 MODES = ("step", "closed", "auto")
@@ -51,6 +53,12 @@ class RunOptions:
         Input values above an encoder's range (:mod:`backends.reference.input_range`).
     max_memory_bytes, max_time_s : int, float or None
         Refuse a run whose estimate exceeds them (:mod:`backends.reference.guards`).
+    workers : int or None
+        Threads that share out the frames of a program run over a frames axis
+        (:mod:`backends.reference.frames_run`; the result is the same, bit for bit, for
+        any number); None: one per core the process may use.  A single frame, and
+        :func:`~backends.reference.simulate` (which batches its frames itself), run on
+        the calling thread.
     """
 
     mode: str = "auto"
@@ -59,6 +67,7 @@ class RunOptions:
     out_of_range: str | Mapping[str, str] = DEFAULT_POLICY
     max_memory_bytes: int | None = MAX_MEMORY_BYTES
     max_time_s: float | None = MAX_TIME_S
+    workers: int | None = None
 
     def checked(self, where: str) -> RunOptions:
         """This record, its engine, arithmetic and limits checked (errors name ``where``).
@@ -66,8 +75,8 @@ class RunOptions:
         Raises
         ------
         SimulationError
-            An unknown mode or arithmetic, or a limit that is not a positive finite
-            number or None.
+            An unknown mode or arithmetic, a limit that is not a positive finite
+            number or None, or ``workers`` that is not a whole number >= 1 or None.
         """
         if not isinstance(self.mode, str) or self.mode not in MODES:
             raise SimulationError(f"{where}: mode {self.mode!r} is not one of {MODES}")
@@ -76,4 +85,26 @@ class RunOptions:
                                   f"{ARITHMETICS}")
         check_limit("max_memory_bytes", self.max_memory_bytes, "bytes", where=where)
         check_limit("max_time_s", self.max_time_s, "s", where=where)
+        check_workers(self.workers, where)
         return self
+
+
+def check_workers(workers: object, where: str) -> int | None:
+    """``workers`` if it is None or a whole number >= 1, else a :class:`SimulationError`.
+
+    Examples
+    --------
+    >>> check_workers(2, "program 'p'"), check_workers(None, "program 'p'")
+    (2, None)
+    >>> check_workers(0, "program 'p'")
+    Traceback (most recent call last):
+    ...
+    ir.errors.SimulationError: program 'p': workers=0 must be a whole number >= 1 (threads \
+for a frames axis) or None (one per core)
+    """
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1:
+        raise SimulationError(f"{where}: workers={workers!r} must be a whole number >= 1 "
+                              "(threads for a frames axis) or None (one per core)")
+    return int(workers)

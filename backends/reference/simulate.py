@@ -17,7 +17,8 @@ from backends.reference.guards import (
     frames_in,
 )
 from backends.reference.input_range import DEFAULT_POLICY
-from backends.reference.plan import SimPlan, build_plan
+from backends.reference.plan import SimPlan
+from backends.reference.plan_cache import cached_plan, peek_plan
 from backends.reference.result import Activity, SimResult
 from backends.reference.run_options import RunOptions
 from backends.reference.step import run_step
@@ -76,7 +77,9 @@ def simulate(
     raster_limit_bytes : int
         Refuse ``record_spikes`` when the rasters would exceed this many bytes.
     plan : SimPlan, optional
-        A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).
+        A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).  Without
+        one, the plan is built on the first call and kept for the next calls on the same
+        network (:mod:`backends.reference.plan_cache`).
     out_of_range : {"reject", "warn", "clip"} or mapping of port to it
         Finite input values above an encoder's range
         (:mod:`backends.reference.input_range`): refuse them with a
@@ -158,6 +161,8 @@ def simulate(
                               f"array; got {type(inputs).__name__}")
     raster_limit = check_limit("raster_limit_bytes", raster_limit_bytes, "bytes",
                                where=f"network {network.name!r}")
+    if plan is None:  # a plan kept from an earlier call on this network (plan_cache)
+        plan = peek_plan(network, arithmetic) if isinstance(arithmetic, str) else None
     if plan is None:
         network.validate()
         problems = closed_form_problems(network)
@@ -172,7 +177,7 @@ def simulate(
                      record_spikes=record_spikes, max_memory_bytes=max_memory_bytes,
                      max_time_s=max_time_s, closed_eligible=mode == "step" and not problems)
     if plan is None:
-        plan = build_plan(network, arithmetic)
+        plan = cached_plan(network, arithmetic)
     check_decoders(network)
     if mode == "closed" and problems:
         raise SimulationError(f"network {network.name!r} cannot use mode='closed': "
