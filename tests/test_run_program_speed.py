@@ -156,3 +156,22 @@ def test_map_frames_raises_the_earliest_failure_and_resolves_workers():
         map_frames(run, 4, 2)
     assert resolve_workers(8, 3) == 3 and resolve_workers(1, 9) == 1
     assert resolve_workers(None, 1) == 1
+
+
+def test_radarsnn_run_workers_flag(tmp_path, capsys):
+    from backends import save
+    from compiler.cli import main
+
+    save(PROGRAM, tmp_path / "art")
+    x = _frames(5, 3)
+    np.save(tmp_path / "x.npy", x)
+    outs = []
+    for n in ("1", "2"):
+        out = tmp_path / f"y{n}.npz"
+        assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "x.npy"), "--clip",
+                     "--workers", n, "-o", str(out), "-q"]) == 0
+        outs.append(np.load(out)["o"])
+    assert _bits(outs[0]) == _bits(outs[1]) and outs[0].shape[0] == 3
+    assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "x.npy"),
+                 "--workers", "0"]) == 2
+    assert "argument --workers: 0 is not a whole number >= 1" in capsys.readouterr().err
