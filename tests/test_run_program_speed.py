@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from backends.reference import RunOptions, program_plans, run_program
+from backends.reference import RunOptions, SimResult, program_plans, run_program
 from backends.reference.frames_run import FrameStack, map_frames, resolve_workers
 from backends.reference.plan_cache import cached_plan, forget_plan, peek_plan
 from compiler.compile import compile_graph
@@ -107,6 +107,32 @@ def test_frames_on_threads_give_the_bits_of_frame_by_frame(seed, n, workers):
                                    for k in alone[0].spike_counts}
     one = run_program(PROGRAM, {"adc": x}, options=RunOptions(out_of_range="clip", workers=1))
     _same_run(framed, one)
+    _same_sims(framed.simulations, [SimResult.stack([a.simulations[k] for a in alone])
+                                    for k in range(len(alone[0].simulations))])
+
+
+def _same_sims(got, want) -> None:
+    assert len(got) == len(want)
+    for a, b in zip(got, want, strict=True):
+        for name in ("outputs", "first_spike_steps", "spikes"):
+            x, y = getattr(a, name), getattr(b, name)
+            assert (x is None) == (y is None) and list(x or ()) == list(y or ()), name
+            for k in x or ():
+                assert _bits(x[k]) == _bits(y[k]), (name, k)
+        for name in ("spike_counts", "synaptic_events", "mode", "arithmetic", "n_steps",
+                     "n_frames", "clipped", "state_overflow"):
+            assert getattr(a, name) == getattr(b, name), name
+
+
+def test_recorded_rasters_over_threads_are_the_frames_rasters():
+    x = _frames(6, 3)
+    framed = run_program(PROGRAM, {"adc": x}, out_of_range="clip", workers=2, mode="step",
+                         record_spikes=True)
+    alone = [run_program(PROGRAM, {"adc": x[i]}, out_of_range="clip", mode="step",
+                         record_spikes=True) for i in range(3)]
+    assert all(s.spikes for s in framed.simulations)
+    _same_sims(framed.simulations, [SimResult.stack([a.simulations[k] for a in alone])
+                                    for k in range(len(alone[0].simulations))])
 
 
 def test_per_input_frames_on_threads_keep_their_peaks():

@@ -28,15 +28,17 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import replace
 from typing import TypeVar
 
 import numpy as np
 
+from backends.reference.result import SimResult
 from ir.errors import SimulationError
 
-__all__ = ["FrameStack", "available_cores", "map_frames", "resolve_workers"]
+__all__ = ["FrameStack", "SimStack", "available_cores", "map_frames", "resolve_workers"]
 
 T = TypeVar("T")
 
@@ -106,6 +108,47 @@ class FrameStack:
         if self._arrays is None:
             return {}
         return {k: self._arrays[k] for k in self._keys or self._arrays}
+
+
+class SimStack:
+    """Each spiking segment's per-frame :class:`SimResult` as one, like :meth:`SimResult.stack`.
+
+    Outputs, first-spike steps and rasters go into :class:`FrameStack` rows as each frame
+    is put; only the counts stay per frame until :meth:`results`.
+    """
+
+    def __init__(self, count: int) -> None:
+        self.count = count
+        self._light: list[Sequence[SimResult] | None] = [None] * count
+        self._stacks: dict[int, tuple[FrameStack, FrameStack, FrameStack]] = {}
+        self._rasters: list[bool] = []
+        self._lock = threading.Lock()
+
+    def put(self, index: int, sims: Sequence[SimResult], *, where: str) -> None:
+        """Frame ``index``'s segment results (each of one frame)."""
+        with self._lock:
+            stacks = [self._stacks.setdefault(k, (FrameStack(self.count), FrameStack(self.count),
+                                                  FrameStack(self.count)))
+                      for k in range(len(sims))]
+        for (outputs, first, spikes), sim in zip(stacks, sims, strict=True):
+            outputs.put(index, sim.outputs, where=where)
+            first.put(index, {k: v[0] for k, v in sim.first_spike_steps.items()}, where=where)
+            if sim.spikes is not None:
+                spikes.put(index, {k: v[0] for k, v in sim.spikes.items()}, where=where)
+        self._light[index] = [replace(s, outputs={}, first_spike_steps={}, spikes=None)
+                              for s in sims]
+        if index == 0:  # rasters are recorded for every frame or none (SimResult.stack)
+            self._rasters = [s.spikes is not None for s in sims]
+
+    def results(self) -> list[SimResult]:
+        """One result per segment over every frame."""
+        out = []
+        for k in range(len(self._light[0] or ())):
+            outputs, first, spikes = self._stacks[k]
+            stacked = SimResult.stack([light[k] for light in self._light])
+            out.append(replace(stacked, outputs=outputs.arrays(), first_spike_steps=first.arrays(),
+                               spikes=spikes.arrays() if self._rasters[k] else None))
+        return out
 
 
 def map_frames(run: Callable[[int], T], count: int, workers: int,

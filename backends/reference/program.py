@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from backends.reference.frames_run import FrameStack, map_frames, resolve_workers
+from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
@@ -355,8 +355,7 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
     per_frame = replace(options, max_memory_bytes=None if limit is None else
                         max(1, int(limit) // count), workers=1)
     where = f"program {program.graph.name!r}"
-    values, peaks = FrameStack(count), FrameStack(count)
-    sims: list[list[SimResult]] = [[] for _ in range(count)]
+    values, peaks, sims = FrameStack(count), FrameStack(count), SimStack(count)
     normalized: list[list[str]] = [[]]
 
     def run(i: int) -> None:
@@ -364,7 +363,7 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
         values.put(i, result.values, where=where)
         if result.input_peaks:
             peaks.put(i, result.input_peaks, where=where)
-        sims[i] = result.simulations
+        sims.put(i, result.simulations, where=where)
         if i == 0:
             normalized[0] = result.normalized
 
@@ -372,5 +371,5 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
     stacked = values.arrays()
     return ProgramResult(
         values=stacked, outputs={k: stacked[k] for k in program.graph.output_ids()},
-        simulations=[SimResult.stack([s[k] for s in sims]) for k in range(len(sims[0]))],
+        simulations=sims.results(),
         normalized=normalized[0], input_peaks=peaks.arrays())
