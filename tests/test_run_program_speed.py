@@ -201,3 +201,14 @@ def test_radarsnn_run_workers_flag(tmp_path, capsys):
     assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "x.npy"),
                  "--workers", "0"]) == 2
     assert "argument --workers: 0 is not a whole number >= 1" in capsys.readouterr().err
+
+
+def test_a_decoded_value_is_one_array_in_values_and_in_its_segment_result():
+    """As in a one-frame run, a decoded output the program keeps as is shares its array."""
+    x = _frames(7, 3)
+    one = run_program(PROGRAM, {"adc": x[0]}, out_of_range="clip")
+    framed = run_program(PROGRAM, {"adc": x}, out_of_range="clip", workers=2)
+    for a, b in zip(one.simulations, framed.simulations, strict=True):
+        for port, value in a.outputs.items():
+            assert (value is one.values.get(port)) == (b.outputs[port] is framed.values.get(port))
+    assert any(v is framed.values.get(p) for s in framed.simulations for p, v in s.outputs.items())

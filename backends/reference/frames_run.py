@@ -122,16 +122,26 @@ class SimStack:
         self._light: list[Sequence[SimResult] | None] = [None] * count
         self._stacks: dict[int, tuple[FrameStack, FrameStack, FrameStack]] = {}
         self._rasters: list[bool] = []
+        self._outputs: list[tuple[list[str], set[str]]] = []
         self._lock = threading.Lock()
 
-    def put(self, index: int, sims: Sequence[SimResult], *, where: str) -> None:
-        """Frame ``index``'s segment results (each of one frame)."""
+    def put(self, index: int, sims: Sequence[SimResult], *, where: str,
+            values: Mapping[str, np.ndarray] | None = None) -> None:
+        """Frame ``index``'s segment results (each of one frame).
+
+        An output that *is* the frame's entry of ``values`` (a decoded value the program
+        keeps as is) is not copied again: :meth:`results` takes its rows from the stacked
+        values given there, as the one-frame result shares the array.
+        """
         with self._lock:
             stacks = [self._stacks.setdefault(k, (FrameStack(self.count), FrameStack(self.count),
                                                   FrameStack(self.count)))
                       for k in range(len(sims))]
-        for (outputs, first, spikes), sim in zip(stacks, sims, strict=True):
-            outputs.put(index, sim.outputs, where=where)
+        shared = [[p for p, v in s.outputs.items() if values is not None and values.get(p) is v]
+                  for s in sims]
+        for (outputs, first, spikes), sim, same in zip(stacks, sims, shared, strict=True):
+            outputs.put(index, {p: v for p, v in sim.outputs.items() if p not in same},
+                        where=where)
             first.put(index, {k: v[0] for k, v in sim.first_spike_steps.items()}, where=where)
             if sim.spikes is not None:
                 spikes.put(index, {k: v[0] for k, v in sim.spikes.items()}, where=where)
@@ -139,14 +149,21 @@ class SimStack:
                               for s in sims]
         if index == 0:  # rasters are recorded for every frame or none (SimResult.stack)
             self._rasters = [s.spikes is not None for s in sims]
+            self._outputs = [(list(s.outputs), set(same)) for s, same in zip(sims, shared,
+                                                                            strict=True)]
 
-    def results(self) -> list[SimResult]:
-        """One result per segment over every frame."""
+    def results(self, values: Mapping[str, np.ndarray] | None = None) -> list[SimResult]:
+        """One result per segment over every frame (``values``: the stacked values whose
+        arrays shared outputs take, see :meth:`put`)."""
         out = []
         for k in range(len(self._light[0] or ())):
             outputs, first, spikes = self._stacks[k]
             stacked = SimResult.stack([light[k] for light in self._light])
-            out.append(replace(stacked, outputs=outputs.arrays(), first_spike_steps=first.arrays(),
+            names, same = self._outputs[k]
+            own = outputs.arrays()
+            decoded = {p: values[p] if p in same and values is not None else own[p]
+                       for p in names}
+            out.append(replace(stacked, outputs=decoded, first_spike_steps=first.arrays(),
                                spikes=spikes.arrays() if self._rasters[k] else None))
         return out
 

@@ -363,7 +363,7 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
         values.put(i, result.values, where=where)
         if result.input_peaks:
             peaks.put(i, result.input_peaks, where=where)
-        sims.put(i, result.simulations, where=where)
+        sims.put(i, result.simulations, where=where, values=result.values)
         if i == 0:
             normalized[0] = result.normalized
 
@@ -371,5 +371,5 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
     stacked = values.arrays()
     return ProgramResult(
         values=stacked, outputs={k: stacked[k] for k in program.graph.output_ids()},
-        simulations=sims.results(),
+        simulations=sims.results(stacked),
         normalized=normalized[0], input_peaks=peaks.arrays())
