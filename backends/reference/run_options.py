@@ -28,10 +28,13 @@ from backends.reference.input_range import DEFAULT_POLICY
 from ir.errors import SimulationError
 from ir.limits import check_limit
 
-__all__ = ["ARITHMETICS", "MODES", "RunOptions", "check_workers"]
+__all__ = ["ARITHMETICS", "ENGINE_MODES", "MODES", "RunOptions", "check_workers"]
 
-#: The engines (``auto``: closed form where the network is eligible, else step).
-MODES = ("step", "closed", "auto")
+#: The engines of :func:`~backends.reference.simulate` (its ``ENGINES`` has these keys).
+ENGINE_MODES = ("step", "closed")
+#: The run modes: an engine, or ``auto`` (closed form where the network is eligible, else
+#: step).  Every list of modes (the CLI's choices, the sweep spec's) is this one.
+MODES = (*ENGINE_MODES, "auto")
 #: Number types of currents and membranes.
 ARITHMETICS = ("float64", "int64")
 
