@@ -212,3 +212,33 @@ def test_a_decoded_value_is_one_array_in_values_and_in_its_segment_result():
         for port, value in a.outputs.items():
             assert (value is one.values.get(port)) == (b.outputs[port] is framed.values.get(port))
     assert any(v is framed.values.get(p) for s in framed.simulations for p, v in s.outputs.items())
+
+
+def test_threads_running_one_new_network_build_its_plan_once(monkeypatch):
+    import threading
+
+    from backends.reference import plan_cache
+
+    program = compile_graph(_rd_chain(), target=None, calibration_inputs={"adc": _frames(8, 2)})
+    built = []
+    original = plan_cache.build_plan
+
+    def counted(network, arithmetic):
+        built.append(network.name)
+        return original(network, arithmetic)
+
+    monkeypatch.setattr(plan_cache, "build_plan", counted)
+    barrier = threading.Barrier(3)
+
+    def get():
+        barrier.wait()
+        return [cached_plan(net, "float64") for net in program.networks]
+
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(get())) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(built) == len(program.networks) and len(results) == 3
+    assert all(r[k] is results[0][k] for r in results for k in range(len(r)))

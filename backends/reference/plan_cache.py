@@ -48,6 +48,8 @@ __all__ = ["cached_plan", "forget_plan", "peek_plan"]
 _LOCK = threading.Lock()
 #: network -> (its parts when the plans were built, {arithmetic: plan})
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: network -> the lock held while its plan is built
+_BUILDING: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _PORTS = ("populations", "projections", "encoders", "decoders")
 
 
@@ -83,14 +85,20 @@ def cached_plan(network: SpikingNetwork, arithmetic: str = "float64") -> SimPlan
     plan = peek_plan(network, arithmetic)
     if plan is not None:
         return plan
-    parts = _parts(network)
-    plan = build_plan(network, arithmetic)  # outside the lock: other networks go on
     with _LOCK:
-        held = _CACHE.get(network)
-        if held is None or not _same(held[0], parts):
-            held = (parts, {})
-            _CACHE[network] = held
-        return held[1].setdefault(arithmetic, plan)
+        building = _BUILDING.setdefault(network, threading.Lock())
+    with building:  # threads running frames of one network build its plan once
+        plan = peek_plan(network, arithmetic)
+        if plan is not None:
+            return plan
+        parts = _parts(network)
+        plan = build_plan(network, arithmetic)  # outside the cache's lock: other networks go on
+        with _LOCK:
+            held = _CACHE.get(network)
+            if held is None or not _same(held[0], parts):
+                held = (parts, {})
+                _CACHE[network] = held
+            return held[1].setdefault(arithmetic, plan)
 
 
 def forget_plan(network: SpikingNetwork) -> None:
