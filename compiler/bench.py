@@ -33,8 +33,6 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
-from compiler.bench_user import user_path_lines, user_path_ratios
-
 __all__ = ["BenchReport", "chain_inputs", "interleaved_medians", "median_s", "run_bench"]
 
 
@@ -141,12 +139,16 @@ class BenchReport:
                          "(goal >= 10 on one core)")
         lines.append(f"  peak RSS of the radarsnn runs {self.peak_rss_gb:.2f} GB (goal <= 2 GB; "
                      "measured before Brian2 runs)")
+        from compiler.bench_user import user_path_lines
+
         lines += user_path_lines(self)
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-able figures, ratios and frames/s (``user_path_ratios``: the user's path's)."""
+        from compiler.bench_user import user_path_ratios
+
         return {**asdict(self), "ratios": self.ratios(), "frames_per_s": self.frames_per_s,
                 "cpu_count": os.cpu_count(),
                 "user_path_ratios": user_path_ratios(self.user_path, self.cpu)}
@@ -188,9 +190,9 @@ def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: Bench
 
 
 def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: int | None = None,
+              user_path: bool = True,
               threads: int = 1, modes: tuple[str, ...] = ("closed", "step"),
-              brian2: bool = True, progress=None, chain=None,
-              user_path: bool = True) -> BenchReport:
+              brian2: bool = True, progress=None, chain=None) -> BenchReport:
     """Time the conventional and the spiking chain of ``preset_name`` (see module docstring).
 
     Parameters
@@ -199,6 +201,10 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
         Radar preset with a scene.
     repeats : int
         Timed runs per figure (median); step mode uses ``step_repeats`` (default ``repeats``).
+    user_path : bool
+        Also time the user's path (:mod:`compiler.bench_user`): ``run_program`` as called
+        on one frame and on a frames axis (1 and N workers), and ``compile_graph`` with
+        and without the accuracy check.
     threads : int
         BLAS threads while timing (threadpoolctl).
     modes : tuple of str
@@ -210,10 +216,6 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     chain : path, optional
         A chain file (YAML) to time instead of the preset's range-Doppler chain; its
         ``adc`` input is cut from the preset's frames (:func:`chain_inputs`).
-    user_path : bool
-        Also time the user's path (:mod:`compiler.bench_user`): ``run_program`` as called
-        on one frame and on a frames axis (1 and N workers), and ``compile_graph`` with
-        and without the accuracy check.
 
     Raises
     ------
@@ -269,22 +271,6 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     return report
 
 
-def _user_path(program, graph, config, scene, frame, repeats: int, report: BenchReport,
-               say) -> None:
-    """:mod:`compiler.bench_user`'s figures on the bench's program, frame and chain."""
-    import numpy as np
-
-    from compiler.bench_user import N_FRAMES, time_compile, time_user_path
-    from radar.scene import simulate_frame
-
-    frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
-                       for s in range(N_FRAMES)])
-    time_user_path(program, frame, frames, repeats, report)
-    say("bench", "user's path done")
-    time_compile(graph, frames[1:4], repeats, report)
-    say("bench", "compile done")
-
-
 def chain_inputs(graph, frame):
     """``frame`` cut to the shape of ``graph``'s ``adc`` node (its leading entries per axis).
 
@@ -306,3 +292,19 @@ def chain_inputs(graph, frame):
                                f"the preset's frame {frame.shape}; pick a preset with at least "
                                "as many receivers, chirps and samples")
     return frame[tuple(slice(0, w) for w in want)]
+
+
+def _user_path(program, graph, config, scene, frame, repeats: int, report: BenchReport,
+               say) -> None:
+    """:mod:`compiler.bench_user`'s figures on the bench's program, frame and chain."""
+    import numpy as np
+
+    from compiler.bench_user import N_FRAMES, time_compile, time_user_path
+    from radar.scene import simulate_frame
+
+    frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
+                       for s in range(N_FRAMES)])
+    time_user_path(program, frame, frames, repeats, report)
+    say("bench", "user's path done")
+    time_compile(graph, frames[1:4], repeats, report)
+    say("bench", "compile done")

@@ -70,4 +70,3 @@ def test_bench_cli_json(capsys):
     assert doc["preset"] == "seed003" and "closed" in doc["frames_per_s"]
     assert {"floor", "floor_core"} <= set(doc["seconds"]) and "closed_over_floor" in doc["ratios"]
     assert len(doc["load_before"]) == 3 and doc["cpu_count"] >= 1
-    assert doc["user_path"] == {} and doc["user_path_ratios"] == {} and doc["cpu"] == {}

@@ -67,3 +67,13 @@ def test_a_chain_the_target_refuses_is_a_note(monkeypatch):
     assert report.user_path == {}
     assert report.notes == ["compile for kapoho_point not timed: chain 'rd' does not fit "
                             "kapoho_point"]
+
+
+def test_no_user_path_leaves_its_keys_empty(capsys):
+    from compiler.cli import main
+
+    assert main(["bench", "--preset", "seed003", "--repeats", "1", "--mode", "closed",
+                 "--no-brian2", "--no-user-path", "--json", "-q"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["user_path"] == {} and doc["user_path_ratios"] == {} and doc["cpu"] == {}
+    assert doc["workers"] == 0 and "closed" in doc["seconds"]
