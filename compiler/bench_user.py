@@ -15,6 +15,10 @@ bench's program and frame, each pair of a ratio *in turn*
   per available core (``workers``);
 * the user and system CPU seconds of the frames-axis timings (``resource.getrusage``:
   system time is mostly page faults);
+* what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
+  ``workers`` series of plain BLAS products (one thread each) run one after the other and
+  side by side, in turn; their ratio ``host_thread_speedup`` is the ceiling of
+  ``workers_speedup`` on this host at this time (1 when other work fills the cores);
 * :func:`time_compile`: ``compile_accuracy_off`` / ``compile_accuracy_on``:
   :func:`radarsnn.compile_graph` of the chain for ``kapoho_point`` on three calibration
   frames, with ``accuracy="off"`` and with the accuracy check (the default).
@@ -25,6 +29,8 @@ Examples
 ...                          "frames_axis_1_worker": 0.04, "frames_axis_n_workers": 0.025},
 ...                         {"user_s": 2.0, "system_s": 0.1}))
 ['run_program_frame_over_planned', 'system_over_user', 'workers_speedup']
+>>> user_path_ratios({"host_blas_1_thread": 2.0, "host_blas_n_threads": 1.0}, {})
+{'host_thread_speedup': 2.0}
 """
 
 from __future__ import annotations
@@ -78,6 +84,28 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     user2, system2 = _cpu()
     report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
     report.cpu.update({"user_s": user2 - user, "system_s": system2 - system})
+    report.user_path.update(_host_threads(workers, repeats))
+
+
+def _host_threads(workers: int, repeats: int) -> dict[str, float]:
+    """Seconds of ``workers`` series of BLAS products one after the other and on threads."""
+    import threading
+
+    a = np.random.default_rng(0).random((512, 512))
+
+    def series() -> None:
+        for _ in range(8):
+            a @ a
+
+    def side_by_side() -> None:
+        threads = [threading.Thread(target=series) for _ in range(workers)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+
+    return _medians({"host_blas_1_thread": lambda: [series() for _ in range(workers)],
+                     "host_blas_n_threads": side_by_side}, repeats)
 
 
 def time_compile(graph, calibration: np.ndarray, repeats: int, report) -> None:
@@ -115,6 +143,7 @@ def user_path_ratios(user_path: dict[str, float], cpu: dict[str, float]) -> dict
     out = {}
     pairs = {"run_program_frame_over_planned": ("run_program_frame", "run_program_frame_planned"),
              "workers_speedup": ("frames_axis_1_worker", "frames_axis_n_workers"),
+             "host_thread_speedup": ("host_blas_1_thread", "host_blas_n_threads"),
              "compile_accuracy_on_over_off": ("compile_accuracy_on", "compile_accuracy_off")}
     for name, (a, b) in pairs.items():
         if user_path.get(a) and user_path.get(b):
@@ -131,7 +160,8 @@ def user_path_lines(report) -> list[str]:
     lines = [f"  user's path (run_program as called; frames axis of {report.n_frames_axis}, "
              f"{report.workers} worker(s) = available cores)"]
     for k, v in report.user_path.items():
-        rate = "" if k.startswith("compile") else f" {1.0 / v if v else float('inf'):>10.2f}"
+        rate = ("" if k.startswith(("compile", "host")) else
+                f" {1.0 / v if v else float('inf'):>10.2f}")
         lines.append(f"  {k:<28} {v:>10.4f}{rate}")
     if report.cpu:
         lines.append(f"  frames-axis CPU: user {report.cpu['user_s']:.2f} s, system "

@@ -91,7 +91,8 @@ def test_the_page_quotes_bench_tables() -> None:
     user = {"user_path.run_program_first_call", "user_path.run_program_frame",
             "user_path.run_program_frame_planned", "user_path.frames_axis_1_worker",
             "user_path.frames_axis_n_workers", "user_path.compile_accuracy_off",
-            "user_path.compile_accuracy_on", "cpu.user_s", "cpu.system_s"}
+            "user_path.compile_accuracy_on", "cpu.user_s", "cpu.system_s",
+            "user_path_ratios.host_thread_speedup"}
     assert user | {f"user_path_ratios.{k}" for k in GOALS} <= set(keys), keys
 
 
@@ -123,6 +124,9 @@ def test_the_user_path_goals_say_what_the_recorded_runs_met() -> None:
             if not key.startswith("user_path_ratios."):
                 continue
             name = key.partition(".")[2]
+            if name not in GOALS:  # a figure that qualifies the others (the host's)
+                assert row[-2:] == ["—", "—"], key
+                continue
             assert row[-2] == GOALS[name].replace("goal <=", "≤").replace("goal >=", "≥"), key
             assert row[-1] == _goal_met(row[-2], [r["user_path_ratios"][name] for r in runs]), key
             seen.add(name)
