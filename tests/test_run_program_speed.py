@@ -242,3 +242,38 @@ def test_threads_running_one_new_network_build_its_plan_once(monkeypatch):
         t.join()
     assert len(built) == len(program.networks) and len(results) == 3
     assert all(r[k] is results[0][k] for r in results for k in range(len(r)))
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 5), workers=st.sampled_from([2, 3]))
+def test_frames_on_processes_give_the_bits_of_one_thread(seed, n, workers):
+    from backends.reference.frames_fork import fork_available
+
+    if not fork_available():  # threads there: the same bits, tested above
+        return
+    x = _frames(seed, n)
+    seen = []
+    forked = run_program(PROGRAM, {"adc": x}, options=RunOptions(
+        out_of_range="clip", workers=workers, parallel="processes"),
+        progress=lambda done, total: seen.append((done, total)))
+    one = run_program(PROGRAM, {"adc": x}, out_of_range="clip", workers=1)
+    assert seen == [(i + 1, n) for i in range(n)]
+    _same_run(forked, one)
+    _same_sims(forked.simulations, one.simulations)
+
+
+def test_a_frame_failing_in_a_process_raises_its_own_error_here():
+    x = _frames(4, 4)
+    x[2] *= 1e6
+    options = RunOptions(workers=2, parallel="processes")
+    with pytest.raises(SimulationError, match="range") as forked:
+        run_program(PROGRAM, {"adc": x}, options=options)
+    with pytest.raises(SimulationError, match="range") as alone:
+        run_program(PROGRAM, {"adc": x[2]})
+    assert str(forked.value) == str(alone.value)
+
+
+def test_parallel_must_be_threads_or_processes():
+    with pytest.raises(SimulationError, match=r"parallel='gpu' is not one of \('threads', "
+                                              r"'processes'\)"):
+        run_program(PROGRAM, {"adc": _frames(0, 2)}, options=RunOptions(parallel="gpu"))

@@ -35,6 +35,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from backends.reference.frames_fork import shared_empty
 from backends.reference.result import SimResult
 from ir.errors import SimulationError
 
@@ -65,10 +66,14 @@ class FrameStack:
     ----------
     count : int
         The number of frames.
+    shared : bool
+        Allocate the arrays in shared memory, for forked workers to write their rows
+        (:mod:`backends.reference.frames_fork`).
     """
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int, shared: bool = False) -> None:
         self.count = count
+        self.shared = shared
         self._arrays: dict[str, np.ndarray] | None = None
         self._keys: list[str] | None = None
         self._lock = threading.Lock()
@@ -83,7 +88,8 @@ class FrameStack:
         """
         with self._lock:
             if self._arrays is None:
-                self._arrays = {k: np.empty((self.count, *np.shape(v)), np.asarray(v).dtype)
+                empty = shared_empty if self.shared else np.empty
+                self._arrays = {k: empty((self.count, *np.shape(v)), np.asarray(v).dtype)
                                 for k, v in values.items()}
                 self._keys = list(values)
         arrays = self._arrays
@@ -117,8 +123,9 @@ class SimStack:
     is put; only the counts stay per frame until :meth:`results`.
     """
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int, shared: bool = False) -> None:
         self.count = count
+        self.shared = shared
         self._light: list[Sequence[SimResult] | None] = [None] * count
         self._stacks: dict[int, tuple[FrameStack, FrameStack, FrameStack]] = {}
         self._rasters: list[bool] = []
@@ -134,8 +141,8 @@ class SimStack:
         values given there, as the one-frame result shares the array.
         """
         with self._lock:
-            stacks = [self._stacks.setdefault(k, (FrameStack(self.count), FrameStack(self.count),
-                                                  FrameStack(self.count)))
+            stacks = [self._stacks.setdefault(k, tuple(FrameStack(self.count, self.shared)
+                                                       for _ in range(3)))
                       for k in range(len(sims))]
         shared = [[p for p, v in s.outputs.items() if values is not None and values.get(p) is v]
                   for s in sims]
@@ -151,6 +158,14 @@ class SimStack:
             self._rasters = [s.spikes is not None for s in sims]
             self._outputs = [(list(s.outputs), set(same)) for s, same in zip(sims, shared,
                                                                             strict=True)]
+
+    def light(self, index: int) -> Sequence[SimResult] | None:
+        """Frame ``index``'s results without their arrays (what a forked worker sends back)."""
+        return self._light[index]
+
+    def set_light(self, index: int, light: Sequence[SimResult] | None) -> None:
+        """Take frame ``index``'s :meth:`light` results from a worker."""
+        self._light[index] = light
 
     def results(self, values: Mapping[str, np.ndarray] | None = None) -> list[SimResult]:
         """One result per segment over every frame (``values``: the stacked values whose

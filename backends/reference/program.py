@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from backends.reference.frames_fork import fork_available, map_frames_forked
 from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
@@ -349,13 +350,16 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
 def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], count: int,
                 progress: Callable[[int, int], None] | None, options: RunOptions, *,
                 plans: list[SimPlan] | None) -> ProgramResult:
-    """:func:`run_program` frame by frame on ``options.workers`` threads, into stacked values
-    (:mod:`backends.reference.frames_run`)."""
+    """:func:`run_program` frame by frame on ``options.workers`` processes or threads, into
+    stacked values (:mod:`backends.reference.frames_run`, :mod:`~.frames_fork`)."""
     limit = options.max_memory_bytes
     per_frame = replace(options, max_memory_bytes=None if limit is None else
                         max(1, int(limit) // count), workers=1)
     where = f"program {program.graph.name!r}"
-    values, peaks, sims = FrameStack(count), FrameStack(count), SimStack(count)
+    workers = resolve_workers(options.workers, count)
+    forked = workers > 1 and options.parallel == "processes" and fork_available()
+    values, peaks, sims = FrameStack(count, forked), FrameStack(count, forked), SimStack(count,
+                                                                                       forked)
     normalized: list[list[str]] = [[]]
 
     def run(i: int) -> None:
@@ -367,7 +371,11 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
         if i == 0:
             normalized[0] = result.normalized
 
-    map_frames(run, count, resolve_workers(options.workers, count), progress)
+    if forked:
+        map_frames_forked(run, count, workers, progress, collect=sims.light,
+                          apply=sims.set_light)
+    else:
+        map_frames(run, count, workers, progress)
     stacked = values.arrays()
     return ProgramResult(
         values=stacked, outputs={k: stacked[k] for k in program.graph.output_ids()},

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -28,7 +29,7 @@ from backends.reference.input_range import DEFAULT_POLICY
 from ir.errors import SimulationError
 from ir.limits import check_limit
 
-__all__ = ["ARITHMETICS", "ENGINE_MODES", "MODES", "RunOptions", "check_workers"]
+__all__ = ["ARITHMETICS", "ENGINE_MODES", "MODES", "PARALLEL", "RunOptions", "check_workers"]
 
 #: The engines of :func:`~backends.reference.simulate` (its ``ENGINES`` has these keys).
 ENGINE_MODES = ("step", "closed")
@@ -37,6 +38,8 @@ ENGINE_MODES = ("step", "closed")
 MODES = (*ENGINE_MODES, "auto")
 #: Number types of currents and membranes.
 ARITHMETICS = ("float64", "int64")
+#: What the workers of a frames axis are (:attr:`RunOptions.parallel`).
+PARALLEL = ("threads", "processes")
 
 
 @dataclass(frozen=True)
@@ -57,11 +60,16 @@ class RunOptions:
     max_memory_bytes, max_time_s : int, float or None
         Refuse a run whose estimate exceeds them (:mod:`backends.reference.guards`).
     workers : int or None
-        Threads that share out the frames of a program run over a frames axis
+        Workers that share out the frames of a program run over a frames axis
         (:mod:`backends.reference.frames_run`; the result is the same, bit for bit, for
         any number); None: one per core the process may use.  A single frame, and
         :func:`~backends.reference.simulate` (which batches its frames itself), run on
         the calling thread.
+    parallel : {"threads", "processes"}
+        What the workers are: threads of this process (the default: on a shared 2-core
+        host they gained more than processes, which pay for the fork and its
+        copy-on-write faults), or forked processes writing into shared memory
+        (:mod:`backends.reference.frames_fork`; threads where the system cannot fork).
     """
 
     mode: str = "auto"
@@ -71,6 +79,7 @@ class RunOptions:
     max_memory_bytes: int | None = MAX_MEMORY_BYTES
     max_time_s: float | None = MAX_TIME_S
     workers: int | None = None
+    parallel: Literal["threads", "processes"] = "threads"
 
     def checked(self, where: str) -> RunOptions:
         """This record, its engine, arithmetic and limits checked (errors name ``where``).
@@ -89,6 +98,9 @@ class RunOptions:
         check_limit("max_memory_bytes", self.max_memory_bytes, "bytes", where=where)
         check_limit("max_time_s", self.max_time_s, "s", where=where)
         check_workers(self.workers, where)
+        if not isinstance(self.parallel, str) or self.parallel not in PARALLEL:
+            raise SimulationError(f"{where}: parallel={self.parallel!r} is not one of "
+                                  f"{PARALLEL}")
         return self
 
 
