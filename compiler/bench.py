@@ -80,7 +80,7 @@ class BenchReport:
     seconds: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     peak_rss_gb: float = 0.0
-    #: The user's path (:mod:`compiler.bench_user`): seconds of ``run_program`` as called
+    #: The user's path (:mod:`radarsnn.bench_user`): seconds of ``run_program`` as called
     #: (per frame) and of ``compile_graph`` with and without the accuracy check.
     user_path: dict[str, float] = field(default_factory=dict)
     #: Threads of the frames-axis figure (the available cores) and frames on its axis.
@@ -139,7 +139,7 @@ class BenchReport:
                          "(goal >= 10 on one core)")
         lines.append(f"  peak RSS of the radarsnn runs {self.peak_rss_gb:.2f} GB (goal <= 2 GB; "
                      "measured before Brian2 runs)")
-        from compiler.bench_user import user_path_lines
+        from radarsnn.bench_user import user_path_lines
 
         lines += user_path_lines(self)
         lines += [f"  note: {n}" for n in self.notes]
@@ -147,7 +147,7 @@ class BenchReport:
 
     def to_dict(self) -> dict:
         """JSON-able figures, ratios and frames/s (``user_path_ratios``: the user's path's)."""
-        from compiler.bench_user import user_path_ratios
+        from radarsnn.bench_user import user_path_ratios
 
         return {**asdict(self), "ratios": self.ratios(), "frames_per_s": self.frames_per_s,
                 "cpu_count": os.cpu_count(),
@@ -202,7 +202,7 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     repeats : int
         Timed runs per figure (median); step mode uses ``step_repeats`` (default ``repeats``).
     user_path : bool
-        Also time the user's path (:mod:`compiler.bench_user`): ``run_program`` as called
+        Also time the user's path (:mod:`radarsnn.bench_user`): ``run_program`` as called
         on one frame and on a frames axis (1 and N workers), and ``compile_graph`` with
         and without the accuracy check.
     threads : int
@@ -296,11 +296,11 @@ def chain_inputs(graph, frame):
 
 def _user_path(program, graph, config, scene, frame, repeats: int, report: BenchReport,
                say) -> None:
-    """:mod:`compiler.bench_user`'s figures on the bench's program, frame and chain."""
+    """:mod:`radarsnn.bench_user`'s figures on the bench's program, frame and chain."""
     import numpy as np
 
-    from compiler.bench_user import N_FRAMES, time_compile, time_user_path
     from radar.scene import simulate_frame
+    from radarsnn.bench_user import N_FRAMES, time_compile, time_user_path
 
     frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
                        for s in range(N_FRAMES)])

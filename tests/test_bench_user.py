@@ -1,4 +1,4 @@
-"""``radarsnn bench``'s user's-path figures (compiler.bench_user): present, consistent, printed.
+"""``radarsnn bench``'s user's-path figures (radarsnn.bench_user): present, consistent, printed.
 
 Timings are never asserted (benchmarks/): only that every figure is measured and that the
 ratios are those of the figures of the same run.
@@ -11,9 +11,9 @@ import json
 import numpy as np
 
 from compiler.bench import BenchReport
-from compiler.bench_user import GOALS, time_compile, time_user_path, user_path_ratios
 from compiler.compile import compile_graph
 from ir import Graph
+from radarsnn.bench_user import GOALS, time_compile, time_user_path, user_path_ratios
 
 
 def _chain() -> Graph:

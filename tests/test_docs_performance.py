@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from compiler.bench import BenchReport
-from compiler.bench_user import GOALS
+from radarsnn.bench_user import GOALS
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "performance.md"

@@ -9,8 +9,7 @@ Bottom to top:
 3. the compile path — ``compiler`` (passes, lowering, hardware, report …), nothing of
    ``backends``;
 4. ``backends`` — the simulator, artifacts, exporters, emission;
-5. the applications — ``compiler.cli``, ``compiler.demo``, ``compiler.bench`` (and
-   ``compiler.bench_user``),
+5. the applications — ``compiler.cli``, ``compiler.demo``, ``compiler.bench``,
    ``compiler.sweep``, ``backends.emit.command``, ``backends.crosscheck.command``,
    ``radarsnn``: anything below.
 
@@ -29,8 +28,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("ir", "radar", "compiler", "backends", "radarsnn")
-APPLICATIONS = ("compiler.cli", "compiler.demo", "compiler.bench", "compiler.bench_user",
-                "compiler.sweep",
+APPLICATIONS = ("compiler.cli", "compiler.demo", "compiler.bench", "compiler.sweep",
                 "backends.emit.command", "backends.crosscheck.command", "radarsnn")
 
 #: (importer, imported) -> why the upward import stays (none today; the test below keeps

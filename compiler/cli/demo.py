@@ -32,9 +32,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    run_bench = _bench_runner(args)
+    from compiler.bench import run_bench
     from compiler.progress import make_progress
 
+    run_bench = _bench_runner(args, run_bench)
     progress = make_progress(args.quiet or args.json, desc="bench")
     try:
         report = run_bench(args.preset, repeats=args.repeats, step_repeats=args.step_repeats,
@@ -47,11 +48,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _bench_runner(args: argparse.Namespace):
-    """:func:`compiler.bench.run_bench` with ``user_path`` set from ``--no-user-path``."""
+def _bench_runner(args: argparse.Namespace, run_bench):
+    """``run_bench`` with ``user_path`` set from ``--no-user-path``."""
     from functools import partial
-
-    from compiler.bench import run_bench
 
     return partial(run_bench, user_path=not args.no_user_path)
 
