@@ -304,7 +304,7 @@ def _user_path(program, graph, config, scene, frame, repeats: int, report: Bench
 
     frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
                        for s in range(N_FRAMES)])
-    time_user_path(program, frame, frames, repeats, report)
+    time_user_path(program, frame, frames, repeats, report, interleaved_medians)
     say("bench", "user's path done")
-    time_compile(graph, frames[1:4], repeats, report)
+    time_compile(graph, frames[1:4], repeats, report, interleaved_medians)
     say("bench", "compile done")

@@ -3,8 +3,8 @@
 The bench's ``closed`` figure runs the closed form with plans built in advance; a user
 calls :func:`backends.reference.run_program` on one frame after another, or on a frames
 axis, and compiles with the accuracy check on.  :func:`time_user_path` times, on the
-bench's program and frame, each pair of a ratio *in turn*
-(:func:`compiler.bench.interleaved_medians`):
+bench's program and frame, each pair of a ratio *in turn* (the bench's
+``interleaved_medians``, passed in as ``medians``):
 
 * ``run_program_frame``: ``run_program(program, {"adc": frame})`` as a user writes it (the
   plans built by the first call and kept, :mod:`backends.reference.plan_cache`), against
@@ -36,11 +36,14 @@ Examples
 from __future__ import annotations
 
 import resource
+from collections.abc import Callable
 
 import numpy as np
 
 __all__ = ["GOALS", "time_compile", "time_user_path", "user_path_lines", "user_path_ratios"]
 
+#: ``medians({name: fn}, repeats) -> {name: seconds}``, each fn timed in turn.
+Medians = Callable[[dict[str, Callable[[], object]], int], dict[str, float]]
 #: The goals of the user's-path ratios (printed next to them).
 GOALS = {"run_program_frame_over_planned": "goal <= 1.2", "workers_speedup": "goal >= 1.7",
          "system_over_user": "goal <= 0.1", "compile_accuracy_on_over_off": "goal <= 2"}
@@ -55,8 +58,8 @@ def _cpu() -> tuple[float, float]:
     return r.ru_utime, r.ru_stime
 
 
-def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
-                   report) -> None:
+def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int, report,
+                   medians: Medians) -> None:
     """Fill ``report.user_path``, ``report.workers`` and ``report.cpu`` (module docstring)."""
     import time
 
@@ -68,7 +71,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     run_program(program, inputs, out_of_range="clip")  # builds and keeps the plans
     report.user_path["run_program_first_call"] = time.perf_counter() - t0
     plans = program_plans(program)
-    report.user_path.update(_medians({
+    report.user_path.update(medians({
         "run_program_frame": lambda: run_program(program, inputs, out_of_range="clip"),
         "run_program_frame_planned": lambda: run_program(program, inputs, mode="closed",
                                                          plans=plans, out_of_range="clip")},
@@ -76,7 +79,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     workers = available_cores()
     report.workers, report.n_frames_axis = workers, len(frames)
     user, system = _cpu()
-    per_call = _medians({
+    per_call = medians({
         "frames_axis_1_worker": lambda: run_program(program, stacked, out_of_range="clip",
                                                     workers=1),
         "frames_axis_n_workers": lambda: run_program(program, stacked, out_of_range="clip",
@@ -84,10 +87,10 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     user2, system2 = _cpu()
     report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
     report.cpu.update({"user_s": user2 - user, "system_s": system2 - system})
-    report.user_path.update(_host_threads(workers, repeats))
+    report.user_path.update(_host_threads(workers, repeats, medians))
 
 
-def _host_threads(workers: int, repeats: int) -> dict[str, float]:
+def _host_threads(workers: int, repeats: int, medians: Medians) -> dict[str, float]:
     """Seconds of ``workers`` series of BLAS products one after the other and on threads."""
     import threading
 
@@ -104,11 +107,12 @@ def _host_threads(workers: int, repeats: int) -> dict[str, float]:
         for t in threads:
             t.join()
 
-    return _medians({"host_blas_1_thread": lambda: [series() for _ in range(workers)],
+    return medians({"host_blas_1_thread": lambda: [series() for _ in range(workers)],
                      "host_blas_n_threads": side_by_side}, repeats)
 
 
-def time_compile(graph, calibration: np.ndarray, repeats: int, report) -> None:
+def time_compile(graph, calibration: np.ndarray, repeats: int, report,
+                 medians: Medians) -> None:
     """``compile_accuracy_off`` / ``_on`` in ``report.user_path``, in turn (a note if the
     chain cannot be compiled for :data:`COMPILE_TARGET`)."""
     from ir.errors import RadarSNNError
@@ -116,7 +120,7 @@ def time_compile(graph, calibration: np.ndarray, repeats: int, report) -> None:
 
     cal = {"adc": calibration}
     try:
-        report.user_path.update(_medians({
+        report.user_path.update(medians({
             "compile_accuracy_off": lambda: compile_graph(graph, COMPILE_TARGET,
                                                           calibration_inputs=cal,
                                                           accuracy="off"),
@@ -130,12 +134,6 @@ def time_compile(graph, calibration: np.ndarray, repeats: int, report) -> None:
     report.notes.append(f"compile figures: radarsnn.compile_graph for {COMPILE_TARGET} on "
                         f"{len(calibration)} calibration frames (the last held back for the "
                         "accuracy check), median of " + str(max(1, min(repeats, 3))))
-
-
-def _medians(fns, repeats: int) -> dict[str, float]:
-    from compiler.bench import interleaved_medians
-
-    return interleaved_medians(fns, repeats)
 
 
 def user_path_ratios(user_path: dict[str, float], cpu: dict[str, float]) -> dict[str, float]:

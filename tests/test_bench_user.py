@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from compiler.bench import BenchReport
+from compiler.bench import BenchReport, interleaved_medians
 from compiler.compile import compile_graph
 from ir import Graph
 from radarsnn.bench_user import GOALS, time_compile, time_user_path, user_path_ratios
@@ -36,8 +36,8 @@ def test_the_user_path_is_timed_and_its_ratios_are_the_figures():
     frames = _frames(4)
     program = compile_graph(_chain(), None, calibration_inputs={"adc": frames})
     report = BenchReport(preset="p", repeats=1, threads=1, machine="m")
-    time_user_path(program, frames[0], frames, 1, report)
-    time_compile(_chain(), frames[1:4], 1, report)
+    time_user_path(program, frames[0], frames, 1, report, interleaved_medians)
+    time_compile(_chain(), frames[1:4], 1, report, interleaved_medians)
     assert set(report.user_path) == {
         "run_program_first_call", "run_program_frame", "run_program_frame_planned",
         "frames_axis_1_worker", "frames_axis_n_workers", "host_blas_1_thread",
@@ -63,7 +63,7 @@ def test_a_chain_the_target_refuses_is_a_note(monkeypatch):
 
     monkeypatch.setattr(radarsnn, "compile_graph", refuse)
     report = BenchReport(preset="p", repeats=1, threads=1, machine="m")
-    time_compile(_chain(), _frames(3), 1, report)
+    time_compile(_chain(), _frames(3), 1, report, interleaved_medians)
     assert report.user_path == {}
     assert report.notes == ["compile for kapoho_point not timed: chain 'rd' does not fit "
                             "kapoho_point"]
