@@ -99,16 +99,23 @@ def test_a_reused_calibration_is_the_measured_one(seed, headroom, policy):
     _same_calibration(first, fresh)
 
 
-@pytest.mark.parametrize("change", ["graph", "headroom", "policy"])
+@pytest.mark.parametrize("change", ["graph", "headroom", "policy", "target"])
 def test_a_different_chain_or_pass_is_measured_again(change):
+    from compiler.hardware import load_profile
+
     inputs = {"p": _maps(1, 2)}
     memo: list = []
-    _calibrated(CompileContext(calibration_inputs=inputs, calibrations=memo), _ca_chain(),
-                Calibrate())
+    _calibrated(CompileContext(calibration_inputs=inputs, calibrations=memo,
+                               target=load_profile("loihi2")), _ca_chain(), Calibrate())
+    target = load_profile("loihi" if change == "target" else "loihi2")
     graph = _ca_chain()
     if change == "graph":
         graph = Graph.from_dict({**graph.to_dict(), "name": "other"})
     pass_ = Calibrate(headroom=2.0 if change == "headroom" else 1.0,
                       policy="per-input" if change == "policy" else "static")
-    _calibrated(CompileContext(calibration_inputs=inputs, calibrations=memo), graph, pass_)
+    _calibrated(CompileContext(calibration_inputs=inputs, calibrations=memo, target=target),
+                graph, pass_)
     assert len(memo) == 2
+    _calibrated(CompileContext(calibration_inputs=inputs, calibrations=memo,
+                               target=load_profile("loihi2")), _ca_chain(), Calibrate())
+    assert len(memo) == 2  # the first again: reused

@@ -218,10 +218,10 @@ class Calibrate(Pass):
         return program
 
     def _memo_key(self, ctx: CompileContext, program: CompiledProgram) -> tuple:
-        """What a measured calibration depends on besides the frames (the same list's)."""
-        return (copy.deepcopy(program.graph), self.policy, float(self.headroom),
-                getattr(ctx.target, "weight_bits", None) is not None, self.max_memory_bytes,
-                tuple(sorted(ctx.calibration_inputs)))
+        """What a measured calibration depends on besides the frames (the same list's): the
+        chain, this pass's fields and the target (compared by value)."""
+        return (copy.deepcopy(program.graph), self.policy, float(self.headroom), ctx.target,
+                self.max_memory_bytes, tuple(sorted(ctx.calibration_inputs)))
 
     def _reused(self, ctx: CompileContext, program: CompiledProgram) -> Calibration | None:
         """A copy of a calibration measured with the same key, if ``ctx`` keeps any."""
