@@ -197,11 +197,13 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
         raise CompileError("the accuracy check needs frames: pass calibration_inputs or "
                            "check_inputs (or accuracy='off' to compile unmeasured)")
 
+    calibrations: list = []  # CompileContext.calibrations: the attempts' frames measured once
+
     def build(auto_motifs: dict[str, str], auto_options: dict[str, Any]) -> CompiledProgram:
         # the user's motifs and options win over the rungs'
         return _compile_once(graph, motifs={**auto_motifs, **motifs}, calibration_inputs=fit,
-                             time_steps=time_steps, weight_bits=weight_bits,
-                             options={**auto_options, **options}, **once)
+                             time_steps=time_steps, weight_bits=weight_bits, **once,
+                             options={**auto_options, **options}, calibrations=calibrations)
 
     runs: list[tuple[CompiledProgram, Any]] = []  # each program measured, with its run
 
@@ -233,7 +235,8 @@ def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
                   registry: LoweringRegistry | None = None,
                   evaluators: EvalRegistry | None = None,
                   progress: Progress | None = None,
-                  options: Mapping[str, Any] | None = None) -> CompiledProgram:
+                  options: Mapping[str, Any] | None = None,
+                  calibrations: list | None = None) -> CompiledProgram:
     """One compile with the motifs given (compile_graph without a simulator)."""
     unknown = sorted(set(options or {}) - set(EXTRA_OPTIONS))
     if unknown:
@@ -255,7 +258,7 @@ def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
     ctx = CompileContext(target=profile,
                          calibration_inputs=dict(calibration_inputs or {}),
                          lowering=registry or default_registry(),
-                         evaluators=dict(evaluators or {}))
+                         evaluators=dict(evaluators or {}), calibrations=calibrations)
     if progress is not None:
         if not callable(progress):
             raise CompileError(f"compile_graph: progress={progress!r:.60} is not callable; give "

@@ -93,6 +93,14 @@ class BenchReport:
     seconds: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     peak_rss_gb: float = 0.0
+    #: The user's path (:mod:`radarsnn.bench_user`): seconds of ``run_program`` as called
+    #: (per frame) and of ``compile_graph`` with and without the accuracy check.
+    user_path: dict[str, float] = field(default_factory=dict)
+    #: Threads of the frames-axis figure (the available cores) and frames on its axis.
+    workers: int = 0
+    n_frames_axis: int = 0
+    #: ``user_s`` / ``system_s``: CPU seconds of the frames-axis timings (getrusage).
+    cpu: dict[str, float] = field(default_factory=dict)
     #: The chain timed (a preset's range-Doppler chain, or a chain file).
     chain: str = ""
     #: ``os.getloadavg()`` (1, 5, 15 min) before and after the timings.
@@ -146,13 +154,19 @@ class BenchReport:
                          "(goal >= 10 on one core)")
         lines.append(f"  peak RSS of the radarsnn runs {self.peak_rss_gb:.2f} GB (goal <= 2 GB; "
                      "measured before Brian2 runs)")
+        from radarsnn.bench_user import user_path_lines
+
+        lines += user_path_lines(self)
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-able figures, ratios and frames/s."""
+        """JSON-able figures, ratios and frames/s (``user_path_ratios``: the user's path's)."""
+        from radarsnn.bench_user import user_path_ratios
+
         return {**asdict(self), "ratios": self.ratios(), "frames_per_s": self.frames_per_s,
-                "cpu_count": os.cpu_count()}
+                "cpu_count": os.cpu_count(),
+                "user_path_ratios": user_path_ratios(self.user_path, self.cpu)}
 
 
 def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: BenchReport) -> None:
@@ -191,6 +205,7 @@ def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: Bench
 
 
 def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: int | None = None,
+              user_path: bool = True,
               threads: int = 1, modes: tuple[str, ...] = ("closed", "step"),
               brian2: bool = True, progress=None, chain=None,
               motif: str | None = None) -> BenchReport:
@@ -202,6 +217,10 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
         Radar preset with a scene.
     repeats : int
         Timed runs per figure (median); step mode uses ``step_repeats`` (default ``repeats``).
+    user_path : bool
+        Also time the user's path (:mod:`radarsnn.bench_user`): ``run_program`` as called
+        on one frame and on a frames axis (1 and N workers), and ``compile_graph`` with
+        and without the accuracy check.
     threads : int
         BLAS threads while timing (threadpoolctl).
     modes : tuple of str
@@ -265,6 +284,9 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
         report.peak_rss_gb = _peak_rss_gb()
         if brian2 and motif is None:
             _range_stage(config, frame, calibration, repeats, report)
+    if user_path:  # run_program as called, then compile with and without the check
+        with threadpool_limits(limits=threads):
+            _user_path(program, graph, config, scene, frame, repeats, report, say)
     report.load_after = os.getloadavg()
     report.notes.append("simulator figures exclude compilation and plan building (done once)")
     return report
@@ -314,3 +336,19 @@ def chain_inputs(graph, frame):
                                f"the preset's frame {frame.shape}; pick a preset with at least "
                                "as many receivers, chirps and samples")
     return frame[tuple(slice(0, w) for w in want)]
+
+
+def _user_path(program, graph, config, scene, frame, repeats: int, report: BenchReport,
+               say) -> None:
+    """:mod:`radarsnn.bench_user`'s figures on the bench's program, frame and chain."""
+    import numpy as np
+
+    from radar.scene import simulate_frame
+    from radarsnn.bench_user import N_FRAMES, time_compile, time_user_path
+
+    frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
+                       for s in range(N_FRAMES)])
+    time_user_path(program, frame, frames, repeats, report, interleaved_medians)
+    say("bench", "user's path done")
+    time_compile(graph, frames[1:4], repeats, report, interleaved_medians)
+    say("bench", "compile done")

@@ -9,7 +9,7 @@ from radarsnn.cli import main
 
 
 def test_bench_times_the_closed_form_against_numpy_and_its_floor():
-    report = run_bench("seed003", repeats=1, modes=("closed",), brian2=False)
+    report = run_bench("seed003", repeats=1, modes=("closed",), brian2=False, user_path=False)
     assert set(report.seconds) == {"conventional", "closed", "floor", "floor_core"}
     ratios = report.ratios()
     assert ratios["closed_over_conventional"] > 0 and ratios["closed_over_floor"] > 0
@@ -65,7 +65,7 @@ def test_ratios_are_computed_from_one_run():
 
 def test_bench_cli_json(capsys):
     assert main(["bench", "--preset", "seed003", "--repeats", "1", "--mode", "closed",
-                 "--no-brian2", "--json", "-q"]) == 0
+                 "--no-brian2", "--no-user-path", "--json", "-q"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["preset"] == "seed003" and "closed" in doc["frames_per_s"]
     assert {"floor", "floor_core"} <= set(doc["seconds"]) and "closed_over_floor" in doc["ratios"]

@@ -84,9 +84,60 @@ def _bench_rows() -> list[tuple[str, list[str]]]:
 
 
 def test_the_page_quotes_bench_tables() -> None:
+    from radarsnn.bench_user import GOALS
+
     keys = [key for key, _ in _bench_rows()]
     assert {"seconds.closed", "seconds.floor", "ratios.closed_over_floor",
             "ratios.brian2_over_step_range_stage", "peak_rss_gb"} <= set(keys), keys
+    user = {"user_path.run_program_first_call", "user_path.run_program_frame",
+            "user_path.run_program_frame_planned", "user_path.frames_axis_1_worker",
+            "user_path.frames_axis_n_workers", "user_path.compile_accuracy_off",
+            "user_path.compile_accuracy_on", "cpu.user_s", "cpu.system_s",
+            "user_path_ratios.host_thread_speedup"}
+    assert user | {f"user_path_ratios.{k}" for k in GOALS} <= set(keys), keys
+
+
+def _goal_met(goal: str, values: list[float]) -> str:
+    """The ``met`` cell of a goal (``≤ 2``, ``≥ 1.7``) over the runs' values.
+
+    Examples
+    --------
+    >>> _goal_met("≤ 2", [1.5, 2.5]), _goal_met("≥ 1.7", [1.8, 1.9]), _goal_met("≤ 1", [3.0])
+    ('preset only', 'yes', 'no')
+    """
+    sign, bound = goal.split()
+    ok = [v <= float(bound) if sign == "≤" else v >= float(bound) for v in values]
+    if all(ok):
+        return "yes"
+    if not any(ok):
+        return "no"
+    return "preset only" if ok[0] else "chain file only"
+
+
+def test_the_user_path_goals_say_what_the_recorded_runs_met() -> None:
+    from radarsnn.bench_user import GOALS
+
+    runs = [_record(name) for name in BENCH_RUNS]
+    rows = [t for t in _tables(PAGE.read_text(encoding="utf-8"))
+            if t[0][1] == "`--json` key" and t[0][-2:] == ["goal", "met"]]
+    seen = set()
+    for table in rows:
+        for row in table[1:]:
+            key = row[1].strip("`")
+            if not key.startswith("user_path_ratios."):
+                continue
+            name = key.partition(".")[2]
+            if name not in GOALS:  # a figure that qualifies the others (the host's)
+                assert row[-2:] == ["—", "—"], key
+                continue
+            assert row[-2] == GOALS[name].replace("goal <=", "≤").replace("goal >=", "≥"), key
+            assert row[-1] == _goal_met(row[-2], [r["user_path_ratios"][name] for r in runs]), key
+            seen.add(name)
+    assert seen == set(GOALS)
+    text = " ".join(PAGE.read_text(encoding="utf-8").split())
+    preset = runs[0]
+    assert f"a frames axis of {preset['n_frames_axis']} frames" in text
+    assert f"{preset['workers']} threads (the cores available)" in text
 
 
 @pytest.mark.parametrize("key, cells", _bench_rows(), ids=[k for k, _ in _bench_rows()])

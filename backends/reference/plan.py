@@ -19,14 +19,13 @@ from backends.reference.delivery import DELIVERY_BUILDERS, Delivery
 from backends.reference.gate import GateInputs, gate_inputs
 from backends.reference.neuron import StepParams
 from backends.reference.resonator import ResonatorStepParams
+from backends.reference.run_options import ARITHMETICS  # one source (re-exported here)
 from compiler.snn.network import Population, SpikingNetwork
 from compiler.snn.resonator import ResonatorParams
 from ir.errors import SimulationError
 
 __all__ = ["SimPlan", "build_plan", "closed_form_problems", "ARITHMETICS"]
 
-#: The supported arithmetics.
-ARITHMETICS = ("float64", "int64")
 
 
 @dataclass(frozen=True, eq=False)

@@ -26,6 +26,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from backends.reference.frames_fork import fork_available, map_frames_forked
+from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
@@ -35,7 +37,7 @@ from backends.reference.simulate import simulate
 from backends.reference.units import apply_units, normalize_inputs, normalized_inputs, unit_plan
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
-from ir.frames import frame, n_frames, stack_frames
+from ir.frames import frame, n_frames
 from ir.interpreter import check_input, eval_registry, evaluate_node
 from ir.limits import check_limit, check_value_sizes
 from ir.model import short_repr
@@ -206,6 +208,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 max_memory_bytes: int | None = MAX_MEMORY_BYTES,
                 max_time_s: float | None = MAX_TIME_S,
                 progress: Callable[[int, int], None] | None = None,
+                workers: int | None = None,
                 options: RunOptions | None = None) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
@@ -240,9 +243,12 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         holds per frame.
     progress : callable, optional
         ``progress(done, total)`` after each frame of a framed run (e.g. a tqdm update).
+    workers : int, optional
+        Threads that share out the frames of a frames axis (None: one per available core;
+        :mod:`backends.reference.frames_run`); the result is the same for any number.
     options : RunOptions, optional
         ``mode``, ``arithmetic``, ``record_spikes``, ``out_of_range``,
-        ``max_memory_bytes`` and ``max_time_s`` as one record (it replaces those
+        ``max_memory_bytes``, ``max_time_s`` and ``workers`` as one record (it replaces those
         arguments); every spiking segment runs with it
         (:mod:`backends.reference.run_options`).
 
@@ -277,21 +283,15 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     if options is None:
         options = RunOptions(mode=mode, arithmetic=arithmetic, record_spikes=record_spikes,
                              out_of_range=out_of_range, max_memory_bytes=max_memory_bytes,
-                             max_time_s=max_time_s)
+                             max_time_s=max_time_s, workers=workers)
     mode, arithmetic, out_of_range = options.mode, options.arithmetic, options.out_of_range
     max_memory_bytes, max_time_s = options.max_memory_bytes, options.max_time_s
     check_policy(out_of_range, where)
     if not isinstance(inputs, Mapping):
         raise SimulationError(f"{where}: inputs must be a mapping of input node id to array; "
                               f"got {type(inputs).__name__}")
-    if not isinstance(mode, str) or mode not in ("step", "closed", "auto"):
-        raise SimulationError(f"{where}: mode {mode!r} is not one of ('step', 'closed', 'auto')")
-    if not isinstance(arithmetic, str) or arithmetic not in ("float64", "int64"):
-        raise SimulationError(f"{where}: arithmetic {arithmetic!r} is not one of "
-                              "('float64', 'int64')")
-    # checked here too: a program without spiking segments never reaches the guard
-    check_limit("max_memory_bytes", max_memory_bytes, "bytes", where=where)
-    check_limit("max_time_s", max_time_s, "s", where=where)
+    # the limits checked here too: a program without spiking segments never reaches the guard
+    options.checked(where)
     check_program(program)
     graph = program.graph
     types = graph.infer_types()
@@ -351,21 +351,34 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
 def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], count: int,
                 progress: Callable[[int, int], None] | None, options: RunOptions, *,
                 plans: list[SimPlan] | None) -> ProgramResult:
-    """:func:`run_program` frame by frame, plans built once; the results stacked."""
-    plans = plans if plans is not None else program_plans(program, options.arithmetic)
+    """:func:`run_program` frame by frame on ``options.workers`` processes or threads, into
+    stacked values (:mod:`backends.reference.frames_run`, :mod:`~.frames_fork`)."""
     limit = options.max_memory_bytes
     per_frame = replace(options, max_memory_bytes=None if limit is None else
-                        max(1, int(limit) // count))
-    runs = []
-    for i in range(count):
-        runs.append(run_program(program, frame(inputs, i), plans=plans, options=per_frame))
-        if progress is not None:
-            progress(i + 1, count)
-    first = runs[0]
+                        max(1, int(limit) // count), workers=1)
+    where = f"program {program.graph.name!r}"
+    workers = resolve_workers(options.workers, count)
+    forked = workers > 1 and options.parallel == "processes" and fork_available()
+    values, peaks, sims = FrameStack(count, forked), FrameStack(count, forked), SimStack(count,
+                                                                                       forked)
+    normalized: list[list[str]] = [[]]
+
+    def run(i: int) -> None:
+        result = run_program(program, frame(inputs, i), plans=plans, options=per_frame)
+        values.put(i, result.values, where=where)
+        if result.input_peaks:
+            peaks.put(i, result.input_peaks, where=where)
+        sims.put(i, result.simulations, where=where, values=result.values)
+        if i == 0:
+            normalized[0] = result.normalized
+
+    if forked:
+        map_frames_forked(run, count, workers, progress, collect=sims.light,
+                          apply=sims.set_light)
+    else:
+        map_frames(run, count, workers, progress)
+    stacked = values.arrays()
     return ProgramResult(
-        values=stack_frames([r.values for r in runs]),
-        outputs=stack_frames([r.outputs for r in runs]),
-        simulations=[SimResult.stack([r.simulations[k] for r in runs])
-                     for k in range(len(first.simulations))],
-        normalized=first.normalized, input_peaks=stack_frames([r.input_peaks for r in runs])
-        if first.input_peaks else {})
+        values=stacked, outputs={k: stacked[k] for k in program.graph.output_ids()},
+        simulations=sims.results(stacked),
+        normalized=normalized[0], input_peaks=peaks.arrays())

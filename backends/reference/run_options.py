@@ -20,18 +20,26 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
 
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY
 from ir.errors import SimulationError
 from ir.limits import check_limit
 
-__all__ = ["ARITHMETICS", "MODES", "RunOptions"]
+__all__ = ["ARITHMETICS", "ENGINE_MODES", "MODES", "PARALLEL", "RunOptions", "check_workers"]
 
-#: The engines (``auto``: closed form where the network is eligible, else step).
-MODES = ("step", "closed", "auto")
+#: The engines of :func:`~backends.reference.simulate` (its ``ENGINES`` has these keys).
+ENGINE_MODES = ("step", "closed")
+#: The run modes: an engine, or ``auto`` (closed form where the network is eligible, else
+#: step).  Every list of modes (the CLI's choices, the sweep spec's) is this one.
+MODES = (*ENGINE_MODES, "auto")
 #: Number types of currents and membranes.
 ARITHMETICS = ("float64", "int64")
+#: What the workers of a frames axis are (:attr:`RunOptions.parallel`).
+PARALLEL = ("threads", "processes")
 
 
 @dataclass(frozen=True)
@@ -51,6 +59,17 @@ class RunOptions:
         Input values above an encoder's range (:mod:`backends.reference.input_range`).
     max_memory_bytes, max_time_s : int, float or None
         Refuse a run whose estimate exceeds them (:mod:`backends.reference.guards`).
+    workers : int or None
+        Workers that share out the frames of a program run over a frames axis
+        (:mod:`backends.reference.frames_run`; the result is the same, bit for bit, for
+        any number); None: one per core the process may use.  A single frame, and
+        :func:`~backends.reference.simulate` (which batches its frames itself), run on
+        the calling thread.
+    parallel : {"threads", "processes"}
+        What the workers are: threads of this process (the default: on a shared 2-core
+        host they gained more than processes, which pay for the fork and its
+        copy-on-write faults), or forked processes writing into shared memory
+        (:mod:`backends.reference.frames_fork`; threads where the system cannot fork).
     """
 
     mode: str = "auto"
@@ -59,6 +78,8 @@ class RunOptions:
     out_of_range: str | Mapping[str, str] = DEFAULT_POLICY
     max_memory_bytes: int | None = MAX_MEMORY_BYTES
     max_time_s: float | None = MAX_TIME_S
+    workers: int | None = None
+    parallel: Literal["threads", "processes"] = "threads"
 
     def checked(self, where: str) -> RunOptions:
         """This record, its engine, arithmetic and limits checked (errors name ``where``).
@@ -66,8 +87,8 @@ class RunOptions:
         Raises
         ------
         SimulationError
-            An unknown mode or arithmetic, or a limit that is not a positive finite
-            number or None.
+            An unknown mode or arithmetic, a limit that is not a positive finite
+            number or None, or ``workers`` that is not a whole number >= 1 or None.
         """
         if not isinstance(self.mode, str) or self.mode not in MODES:
             raise SimulationError(f"{where}: mode {self.mode!r} is not one of {MODES}")
@@ -76,4 +97,29 @@ class RunOptions:
                                   f"{ARITHMETICS}")
         check_limit("max_memory_bytes", self.max_memory_bytes, "bytes", where=where)
         check_limit("max_time_s", self.max_time_s, "s", where=where)
+        check_workers(self.workers, where)
+        if not isinstance(self.parallel, str) or self.parallel not in PARALLEL:
+            raise SimulationError(f"{where}: parallel={self.parallel!r} is not one of "
+                                  f"{PARALLEL}")
         return self
+
+
+def check_workers(workers: object, where: str) -> int | None:
+    """``workers`` if it is None or a whole number >= 1, else a :class:`SimulationError`.
+
+    Examples
+    --------
+    >>> check_workers(2, "program 'p'"), check_workers(None, "program 'p'")
+    (2, None)
+    >>> check_workers(0, "program 'p'")
+    Traceback (most recent call last):
+    ...
+    ir.errors.SimulationError: program 'p': workers=0 must be a whole number >= 1 (threads \
+for a frames axis) or None (one per core)
+    """
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1:
+        raise SimulationError(f"{where}: workers={workers!r} must be a whole number >= 1 "
+                              "(threads for a frames axis) or None (one per core)")
+    return int(workers)

@@ -17,9 +17,10 @@ from backends.reference.guards import (
     frames_in,
 )
 from backends.reference.input_range import DEFAULT_POLICY
-from backends.reference.plan import SimPlan, build_plan
+from backends.reference.plan import SimPlan
+from backends.reference.plan_cache import cached_plan, peek_plan
 from backends.reference.result import Activity, SimResult
-from backends.reference.run_options import RunOptions
+from backends.reference.run_options import ENGINE_MODES, RunOptions
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
@@ -32,8 +33,9 @@ RASTER_LIMIT_BYTES = 256 << 20
 
 log = logging.getLogger(__name__)
 
-#: The engines by mode name.
-ENGINES: dict[str, Callable[..., Activity]] = {"step": run_step, "closed": run_closed}
+#: The engines by mode name (the keys are :data:`~backends.reference.run_options.ENGINE_MODES`).
+ENGINES: dict[str, Callable[..., Activity]] = dict(zip(ENGINE_MODES, (run_step, run_closed),
+                                                       strict=True))
 
 
 def simulate(
@@ -76,7 +78,9 @@ def simulate(
     raster_limit_bytes : int
         Refuse ``record_spikes`` when the rasters would exceed this many bytes.
     plan : SimPlan, optional
-        A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).
+        A plan of ``network`` from :func:`build_plan` to reuse (same arithmetic).  Without
+        one, the plan is built on the first call and kept for the next calls on the same
+        network (:mod:`backends.reference.plan_cache`).
     out_of_range : {"reject", "warn", "clip"} or mapping of port to it
         Finite input values above an encoder's range
         (:mod:`backends.reference.input_range`): refuse them with a
@@ -146,18 +150,21 @@ def simulate(
                 if hasattr(network, "segments") else "give a compiler.snn.SpikingNetwork")
         raise SimulationError(f"simulate runs one spiking network, not a "
                               f"{type(network).__name__}; {hint}")
-    if options is not None:
-        mode, arithmetic, record_spikes = options.mode, options.arithmetic, options.record_spikes
-        out_of_range, max_memory_bytes = options.out_of_range, options.max_memory_bytes
-        max_time_s = options.max_time_s
-    if not isinstance(mode, str) or mode not in (*ENGINES, "auto"):
-        raise SimulationError(f"network {network.name!r}: mode {mode!r} is not one of "
-                              f"{(*ENGINES, 'auto')}")
+    if options is None:
+        options = RunOptions(mode=mode, arithmetic=arithmetic, record_spikes=record_spikes,
+                             out_of_range=out_of_range, max_memory_bytes=max_memory_bytes,
+                             max_time_s=max_time_s)
+    options.checked(f"network {network.name!r}")  # mode, arithmetic, limits
+    mode, arithmetic, record_spikes = options.mode, options.arithmetic, options.record_spikes
+    out_of_range, max_memory_bytes = options.out_of_range, options.max_memory_bytes
+    max_time_s = options.max_time_s
     if not isinstance(inputs, Mapping):
         raise SimulationError(f"network {network.name!r}: inputs must be a mapping of port to "
                               f"array; got {type(inputs).__name__}")
     raster_limit = check_limit("raster_limit_bytes", raster_limit_bytes, "bytes",
                                where=f"network {network.name!r}")
+    if plan is None:  # a plan kept from an earlier call on this network (plan_cache)
+        plan = peek_plan(network, arithmetic)
     if plan is None:
         network.validate()
         problems = closed_form_problems(network)
@@ -172,7 +179,7 @@ def simulate(
                      record_spikes=record_spikes, max_memory_bytes=max_memory_bytes,
                      max_time_s=max_time_s, closed_eligible=mode == "step" and not problems)
     if plan is None:
-        plan = build_plan(network, arithmetic)
+        plan = cached_plan(network, arithmetic)
     check_decoders(network)
     if mode == "closed" and problems:
         raise SimulationError(f"network {network.name!r} cannot use mode='closed': "

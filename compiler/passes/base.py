@@ -72,6 +72,10 @@ class CompileContext:
         and what the program's host segments run (:func:`run_pipeline` records them).
     progress : callable
         ``progress(pass_name, message)`` for long work (silent by default).
+    calibrations : list, optional
+        Calibrations measured on these ``calibration_inputs`` by earlier compiles of the
+        same chain, for the calibrate pass to reuse (a measured compile's attempts share
+        one list: :func:`compiler.passes.calibrate.Calibrate`); None: measure every time.
     """
 
     target: HardwareProfile = NO_TARGET
@@ -79,6 +83,7 @@ class CompileContext:
     lowering: Any = None
     evaluators: Mapping[type, Callable[..., Any]] = field(default_factory=dict)
     progress: Progress = _silent
+    calibrations: list | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.target, HardwareProfile):

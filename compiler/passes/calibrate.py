@@ -49,6 +49,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import warnings
@@ -204,6 +205,35 @@ class Calibrate(Pass):
             raise CompileError(f"headroom={self.headroom} must be a finite number >= 1")
 
     def apply(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
+        reuse = self._reused(ctx, program)
+        if reuse is not None:
+            program.records.calibration = reuse
+            log.info("policy %s: the ranges measured for an earlier attempt on the same "
+                     "chain and frames, reused", self.policy)
+            return program
+        program = self._measure(ctx, program)
+        if ctx.calibrations is not None and program.records.calibration.source == "inputs":
+            ctx.calibrations.append((self._memo_key(ctx, program),
+                                     copy.deepcopy(program.records.calibration)))
+        return program
+
+    def _memo_key(self, ctx: CompileContext, program: CompiledProgram) -> tuple:
+        """What a measured calibration depends on besides the frames (the same list's): the
+        chain, this pass's fields and the target (compared by value)."""
+        return (copy.deepcopy(program.graph), self.policy, float(self.headroom), ctx.target,
+                self.max_memory_bytes, tuple(sorted(ctx.calibration_inputs)))
+
+    def _reused(self, ctx: CompileContext, program: CompiledProgram) -> Calibration | None:
+        """A copy of a calibration measured with the same key, if ``ctx`` keeps any."""
+        if not ctx.calibrations or not ctx.calibration_inputs:
+            return None
+        key = self._memo_key(ctx, program)
+        for held, calibration in ctx.calibrations:
+            if held[1:] == key[1:] and held[0] == key[0]:
+                return copy.deepcopy(calibration)
+        return None
+
+    def _measure(self, ctx: CompileContext, program: CompiledProgram) -> CompiledProgram:
         policy, headroom = self.policy, float(self.headroom)
         graph, types = program.graph, program.graph.infer_types()
         norm = {n: mixed_axes(graph, n) if policy == "per-input" else ()

@@ -35,6 +35,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from compiler.progress import make_progress
     from radarsnn.bench import run_bench
 
+    run_bench = _bench_runner(args, run_bench)
     progress = make_progress(args.quiet or args.json, desc="bench")
     try:
         report = run_bench(args.preset, repeats=args.repeats, step_repeats=args.step_repeats,
@@ -46,6 +47,13 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     print(json.dumps(report.to_dict(), indent=2, sort_keys=True) if args.json
           else report.to_text())
     return 0
+
+
+def _bench_runner(args: argparse.Namespace, run_bench):
+    """``run_bench`` with ``user_path`` set from ``--no-user-path``."""
+    from functools import partial
+
+    return partial(run_bench, user_path=not args.no_user_path)
 
 
 def add_parsers(sub) -> None:
@@ -75,6 +83,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--mode", action="append", choices=["closed", "step"],
                    help="engines to time (default both)")
     p.add_argument("--no-brian2", action="store_true", help="skip the Brian2 comparison")
+    p.add_argument("--no-user-path", action="store_true",
+                   help="skip the user's path: run_program as called (one frame, a frames axis "
+                        "on 1 and N workers) and compile with and without the accuracy check")
     p.add_argument("--chain", type=Path, metavar="YAML",
                    help="time this chain file instead of the preset's range-Doppler chain "
                         "(its adc input cut from the preset's frames)")

@@ -2,7 +2,8 @@
 
 Inputs are read by :mod:`radarsnn.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
 ``.bin``); one with a leading frames axis runs frame after frame with a progress
-bar (:mod:`ir.frames`).  Values above an encoder's calibrated range are refused by
+bar (:mod:`ir.frames`), the frames shared out to ``--workers`` threads (default: one
+per available core).  Values above an encoder's calibrated range are refused by
 default (one ``error:`` line naming the count and ``--clip``); ``--clip`` clips them
 silently, ``--out-of-range warn`` clips them with one warning line (docs/cli.md).
 """
@@ -103,13 +104,35 @@ def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_rang
     types = loaded.graph.infer_types()
     count = n_frames(types, inputs, f"program {loaded.graph.name!r}")
     if count is None or args.quiet or args.json:
-        return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range)
+        return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
+                           workers=args.workers)
     from tqdm import tqdm
 
     with tqdm(total=count, desc="run", unit="frame", file=sys.stderr, leave=False,
               disable=None, dynamic_ncols=True) as bar:  # disable=None: no bar off a terminal
         return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
-                           progress=lambda done, total: bar.update(1))
+                           progress=lambda done, total: bar.update(1), workers=args.workers)
+
+
+def _workers(text: str) -> int:
+    """``--workers N``: a whole number >= 1 (argparse names the flag when it is not).
+
+    Examples
+    --------
+    >>> _workers("2")
+    2
+    >>> _workers("0")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: 0 is not a whole number >= 1
+    """
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text} is not a whole number >= 1")
+    return value
 
 
 def clipped_warning(clipped: dict[str, int]) -> str:
@@ -151,6 +174,9 @@ def add_parsers(sub) -> None:
                         "with the count (warn), or clip silently (clip); a clipped count is in "
                         "the summary and --json")
     p.add_argument("--clip", action="store_true", help="the same as --out-of-range clip")
+    p.add_argument("--workers", type=_workers, default=None, metavar="N",
+                   help="threads that share out the frames of an input with a frames axis "
+                        "(the result is the same for any N; default: one per available core)")
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing")

@@ -1,0 +1,169 @@
+"""``radarsnn bench``: the user's path — what ``run_program`` and ``compile_graph`` cost as called.
+
+The bench's ``closed`` figure runs the closed form with plans built in advance; a user
+calls :func:`backends.reference.run_program` on one frame after another, or on a frames
+axis, and compiles with the accuracy check on.  :func:`time_user_path` times, on the
+bench's program and frame, each pair of a ratio *in turn* (the bench's
+``interleaved_medians``, passed in as ``medians``):
+
+* ``run_program_frame``: ``run_program(program, {"adc": frame})`` as a user writes it (the
+  plans built by the first call and kept, :mod:`backends.reference.plan_cache`), against
+  ``run_program_frame_planned``: the bench's own call (``mode="closed"``, ``plans=`` given);
+  ``run_program_first_call``: the very first call, plans built (one run, not a median);
+* ``frames_axis_1_worker`` / ``frames_axis_n_workers``: seconds per frame of one call on
+  ``n_frames`` frames stacked on a leading axis, with ``workers=1`` and with one thread
+  per available core (``workers``);
+* the user and system CPU seconds of the frames-axis timings (``resource.getrusage``:
+  system time is mostly page faults);
+* what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
+  ``workers`` series of plain BLAS products (one thread each) run one after the other and
+  side by side, in turn; their ratio ``host_thread_speedup`` is the ceiling of
+  ``workers_speedup`` on this host at this time (1 when other work fills the cores);
+* :func:`time_compile`: ``compile_accuracy_off`` / ``compile_accuracy_on``:
+  :func:`radarsnn.compile_graph` of the chain for ``kapoho_point`` on three calibration
+  frames, with ``accuracy="off"`` and with the accuracy check (the default).
+
+Examples
+--------
+>>> sorted(user_path_ratios({"run_program_frame": 0.03, "run_program_frame_planned": 0.025,
+...                          "frames_axis_1_worker": 0.04, "frames_axis_n_workers": 0.025},
+...                         {"user_s": 2.0, "system_s": 0.1}))
+['run_program_frame_over_planned', 'system_over_user', 'workers_speedup']
+>>> user_path_ratios({"host_blas_1_thread": 2.0, "host_blas_n_threads": 1.0}, {})
+{'host_thread_speedup': 2.0}
+"""
+
+from __future__ import annotations
+
+import resource
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["GOALS", "time_compile", "time_user_path", "user_path_lines", "user_path_ratios"]
+
+#: ``medians({name: fn}, repeats) -> {name: seconds}``, each fn timed in turn.
+Medians = Callable[[dict[str, Callable[[], object]], int], dict[str, float]]
+#: The goals of the user's-path ratios (printed next to them).
+GOALS = {"run_program_frame_over_planned": "goal <= 1.2", "workers_speedup": "goal >= 1.7",
+         "system_over_user": "goal <= 0.1", "compile_accuracy_on_over_off": "goal <= 2"}
+#: Frames on the frames axis timed.
+N_FRAMES = 8
+#: The target the compile figures are measured for (the README's quick start).
+COMPILE_TARGET = "kapoho_point"
+
+
+def _cpu() -> tuple[float, float]:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime, r.ru_stime
+
+
+def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int, report,
+                   medians: Medians) -> None:
+    """Fill ``report.user_path``, ``report.workers`` and ``report.cpu`` (module docstring)."""
+    import time
+
+    from backends.reference import program_plans, run_program
+    from backends.reference.frames_run import available_cores
+
+    inputs, stacked = {"adc": frame}, {"adc": frames}
+    t0 = time.perf_counter()
+    run_program(program, inputs, out_of_range="clip")  # builds and keeps the plans
+    report.user_path["run_program_first_call"] = time.perf_counter() - t0
+    plans = program_plans(program)
+    report.user_path.update(medians({
+        "run_program_frame": lambda: run_program(program, inputs, out_of_range="clip"),
+        "run_program_frame_planned": lambda: run_program(program, inputs, mode="closed",
+                                                         plans=plans, out_of_range="clip")},
+        repeats))
+    workers = available_cores()
+    report.workers, report.n_frames_axis = workers, len(frames)
+    user, system = _cpu()
+    per_call = medians({
+        "frames_axis_1_worker": lambda: run_program(program, stacked, out_of_range="clip",
+                                                    workers=1),
+        "frames_axis_n_workers": lambda: run_program(program, stacked, out_of_range="clip",
+                                                     workers=workers)}, repeats)
+    user2, system2 = _cpu()
+    report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
+    report.cpu.update({"user_s": user2 - user, "system_s": system2 - system})
+    report.user_path.update(_host_threads(workers, repeats, medians))
+
+
+def _host_threads(workers: int, repeats: int, medians: Medians) -> dict[str, float]:
+    """Seconds of ``workers`` series of BLAS products one after the other and on threads."""
+    import threading
+
+    a = np.random.default_rng(0).random((512, 512))
+
+    def series() -> None:
+        for _ in range(8):
+            a @ a
+
+    def side_by_side() -> None:
+        threads = [threading.Thread(target=series) for _ in range(workers)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+
+    return medians({"host_blas_1_thread": lambda: [series() for _ in range(workers)],
+                     "host_blas_n_threads": side_by_side}, repeats)
+
+
+def time_compile(graph, calibration: np.ndarray, repeats: int, report,
+                 medians: Medians) -> None:
+    """``compile_accuracy_off`` / ``_on`` in ``report.user_path``, in turn (a note if the
+    chain cannot be compiled for :data:`COMPILE_TARGET`)."""
+    from ir.errors import RadarSNNError
+    from radarsnn import compile_graph
+
+    cal = {"adc": calibration}
+    try:
+        report.user_path.update(medians({
+            "compile_accuracy_off": lambda: compile_graph(graph, COMPILE_TARGET,
+                                                          calibration_inputs=cal,
+                                                          accuracy="off"),
+            "compile_accuracy_on": lambda: compile_graph(graph, COMPILE_TARGET,
+                                                         calibration_inputs=cal)},
+            max(1, min(repeats, 3))))
+    except RadarSNNError as err:
+        report.notes.append(f"compile for {COMPILE_TARGET} not timed: "
+                            f"{' '.join(str(err).split())[:200]}")
+        return
+    report.notes.append(f"compile figures: radarsnn.compile_graph for {COMPILE_TARGET} on "
+                        f"{len(calibration)} calibration frames (the last held back for the "
+                        "accuracy check), median of " + str(max(1, min(repeats, 3))))
+
+
+def user_path_ratios(user_path: dict[str, float], cpu: dict[str, float]) -> dict[str, float]:
+    """The user's-path ratios of the figures present (:data:`GOALS`)."""
+    out = {}
+    pairs = {"run_program_frame_over_planned": ("run_program_frame", "run_program_frame_planned"),
+             "workers_speedup": ("frames_axis_1_worker", "frames_axis_n_workers"),
+             "host_thread_speedup": ("host_blas_1_thread", "host_blas_n_threads"),
+             "compile_accuracy_on_over_off": ("compile_accuracy_on", "compile_accuracy_off")}
+    for name, (a, b) in pairs.items():
+        if user_path.get(a) and user_path.get(b):
+            out[name] = user_path[a] / user_path[b]
+    if cpu.get("user_s"):
+        out["system_over_user"] = cpu.get("system_s", 0.0) / cpu["user_s"]
+    return out
+
+
+def user_path_lines(report) -> list[str]:
+    """The table lines of the user's path (empty when it was not timed)."""
+    if not report.user_path:
+        return []
+    lines = [f"  user's path (run_program as called; frames axis of {report.n_frames_axis}, "
+             f"{report.workers} worker(s) = available cores)"]
+    for k, v in report.user_path.items():
+        rate = ("" if k.startswith(("compile", "host")) else
+                f" {1.0 / v if v else float('inf'):>10.2f}")
+        lines.append(f"  {k:<28} {v:>10.4f}{rate}")
+    if report.cpu:
+        lines.append(f"  frames-axis CPU: user {report.cpu['user_s']:.2f} s, system "
+                     f"{report.cpu['system_s']:.2f} s")
+    for k, v in user_path_ratios(report.user_path, report.cpu).items():
+        lines.append(f"  {k:<32} {v:>8.2f}  {GOALS.get(k, '')}")
+    return lines
