@@ -74,7 +74,7 @@ def test_bench_cli_json(capsys):
 
 def test_bench_motif_resonator_times_the_resonator_chain_against_its_rotations(capsys):
     assert main(["bench", "--preset", "seed003", "--motif", "resonator", "--repeats", "1",
-                 "--mode", "closed", "--no-brian2", "--json", "-q"]) == 0
+                 "--mode", "closed", "--no-brian2", "--no-user-path", "--json", "-q"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["motif"] == "resonator" and "resonator" in doc["chain"]
     assert set(doc["seconds"]) == {"conventional", "closed", "floor", "floor_core"}

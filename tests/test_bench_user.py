@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from compiler.bench import BenchReport, interleaved_medians
+from radarsnn.bench import BenchReport, interleaved_medians
 from compiler.compile import compile_graph
 from ir import Graph
 from radarsnn.bench_user import GOALS, time_compile, time_user_path, user_path_ratios
@@ -70,7 +70,7 @@ def test_a_chain_the_target_refuses_is_a_note(monkeypatch):
 
 
 def test_no_user_path_leaves_its_keys_empty(capsys):
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     assert main(["bench", "--preset", "seed003", "--repeats", "1", "--mode", "closed",
                  "--no-brian2", "--no-user-path", "--json", "-q"]) == 0

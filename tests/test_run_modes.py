@@ -16,8 +16,8 @@ import pytest
 from backends.reference import RunOptions, plan, simulate
 from backends.reference.run_options import ARITHMETICS, ENGINE_MODES, MODES
 from backends.reference.simulate import ENGINES
-from compiler.cli import build_parser
-from compiler.sweep.spec import SweepSpec
+from radarsnn.cli import build_parser
+from radarsnn.sweep.spec import SweepSpec
 from ir.errors import SimulationError
 
 

@@ -186,7 +186,7 @@ def test_map_frames_raises_the_earliest_failure_and_resolves_workers():
 
 def test_radarsnn_run_workers_flag(tmp_path, capsys):
     from backends import save
-    from compiler.cli import main
+    from radarsnn.cli import main
 
     save(PROGRAM, tmp_path / "art")
     x = _frames(5, 3)
