@@ -26,9 +26,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from backends.reference.engine import REFERENCE, SegmentEngine
 from backends.reference.frames_fork import fork_available, map_frames_forked
 from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
-from backends.reference.engine import REFERENCE, SegmentEngine
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
