@@ -10,9 +10,9 @@ import json
 
 import numpy as np
 
-from radarsnn.bench import BenchReport, interleaved_medians
 from compiler.compile import compile_graph
 from ir import Graph
+from radarsnn.bench import BenchReport, interleaved_medians
 from radarsnn.bench_user import GOALS, time_compile, time_user_path, user_path_ratios
 
 

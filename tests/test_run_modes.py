@@ -16,9 +16,9 @@ import pytest
 from backends.reference import RunOptions, plan, simulate
 from backends.reference.run_options import ARITHMETICS, ENGINE_MODES, MODES
 from backends.reference.simulate import ENGINES
+from ir.errors import SimulationError
 from radarsnn.cli import build_parser
 from radarsnn.sweep.spec import SweepSpec
-from ir.errors import SimulationError
 
 
 def _choices(command: str, flag: str) -> list[str]:

@@ -8,10 +8,12 @@ Brian2 is the optional extra ``brian2``; it is imported only when a simulation
 runs.  Modules: :mod:`~backends.brian2.equations` (neuron code),
 :mod:`~backends.brian2.synapses` (projections expanded into synapse lists),
 :mod:`~backends.brian2.build` (the Brian2 objects and their schedule),
-:mod:`~backends.brian2.run` (run and read back).
+:mod:`~backends.brian2.run` (run and read back), :mod:`~backends.brian2.engine`
+(:class:`Brian2Engine`: a whole compiled program through ``run_program``).
 """
 
 from backends.brian2.build import SUB_SLOTS, Brian2Model, build_model
+from backends.brian2.engine import Brian2Engine
 from backends.brian2.equations import NeuronCode, neuron_code
 from backends.brian2.run import TARGETS, import_brian2, read_activity, simulate_brian2
 from backends.brian2.synapses import EXPANDERS, SynapseList, dense_weights, expand_projection
@@ -20,6 +22,7 @@ __all__ = [
     "EXPANDERS",
     "SUB_SLOTS",
     "TARGETS",
+    "Brian2Engine",
     "Brian2Model",
     "NeuronCode",
     "SynapseList",

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from backends.reference.engine import REFERENCE, SegmentEngine
 from backends.reference.frames_fork import fork_available, map_frames_forked
 from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
@@ -33,7 +34,6 @@ from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.result import SimResult
 from backends.reference.run_options import RunOptions
-from backends.reference.simulate import simulate
 from backends.reference.units import apply_units, normalize_inputs, normalized_inputs, unit_plan
 from compiler.program import CompiledProgram
 from ir.errors import SimulationError
@@ -209,7 +209,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 max_time_s: float | None = MAX_TIME_S,
                 progress: Callable[[int, int], None] | None = None,
                 workers: int | None = None,
-                options: RunOptions | None = None) -> ProgramResult:
+                options: RunOptions | None = None,
+                engine: SegmentEngine = REFERENCE) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
 
     Parameters
@@ -251,6 +252,10 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         ``max_memory_bytes``, ``max_time_s`` and ``workers`` as one record (it replaces those
         arguments); every spiking segment runs with it
         (:mod:`backends.reference.run_options`).
+    engine : SegmentEngine
+        What runs each spiking segment (:mod:`backends.reference.engine`): the reference
+        simulator by default; e.g. :class:`backends.brian2.Brian2Engine` runs the whole
+        program with Brian2 simulating its networks (``plans`` apply to the reference).
 
     Raises
     ------
@@ -277,6 +282,10 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                               f"CompiledProgram, not {type(program).__name__}; compile one with "
                               "compile_graph (one SpikingNetwork: simulate)")
     where = f"program {program.graph.name!r}"
+    if not isinstance(engine, SegmentEngine):
+        raise SimulationError(f"{where}: engine={short_repr(engine)} has no name and "
+                              "simulate(network, inputs, *, options, plan); give a "
+                              "backends.reference.engine.SegmentEngine (default: the reference)")
     if progress is not None and not callable(progress):
         raise SimulationError(f"{where}: progress={short_repr(progress)} is not callable; give "
                               "a function progress(done, total) or None")
@@ -309,7 +318,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     count = n_frames(types, inputs, where)
     if count is not None:
         return _run_frames(program, inputs, count, progress, options,
-                           plans=list(plans) if plans is not None else None)
+                           plans=list(plans) if plans is not None else None, engine=engine)
     # every node's value is kept: refuse what cannot fit before the first is allocated
     check_value_sizes(graph, types, types, max_memory_bytes=check_limit(
         "max_memory_bytes", max_memory_bytes, "bytes", where=where), error=SimulationError,
@@ -327,8 +336,8 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
         if seg.kind == "spiking":
             plan = None if plans is None else plans[len(sims)]
             policy = {p: "clip" if p in decoded else out_of_range for p in seg.inputs}
-            result = simulate(seg.network, {p: values[p] for p in seg.inputs}, plan=plan,
-                              options=replace(options, out_of_range=policy))
+            result = engine.simulate(seg.network, {p: values[p] for p in seg.inputs},
+                                     options=replace(options, out_of_range=policy), plan=plan)
             decoded.update(result.outputs)
             # a decoded mask (0/1 from spikes) is a boolean array, like the interpreter's
             values.update({k: (np.asarray(v) != 0) if types[k].domain == "mask" else v
@@ -350,7 +359,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
 
 def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], count: int,
                 progress: Callable[[int, int], None] | None, options: RunOptions, *,
-                plans: list[SimPlan] | None) -> ProgramResult:
+                plans: list[SimPlan] | None, engine: SegmentEngine) -> ProgramResult:
     """:func:`run_program` frame by frame on ``options.workers`` processes or threads, into
     stacked values (:mod:`backends.reference.frames_run`, :mod:`~.frames_fork`)."""
     limit = options.max_memory_bytes
@@ -364,7 +373,8 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
     normalized: list[list[str]] = [[]]
 
     def run(i: int) -> None:
-        result = run_program(program, frame(inputs, i), plans=plans, options=per_frame)
+        result = run_program(program, frame(inputs, i), plans=plans, options=per_frame,
+                             engine=engine)
         values.put(i, result.values, where=where)
         if result.input_peaks:
             peaks.put(i, result.input_peaks, where=where)
