@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import time
 from unittest import mock
 
@@ -31,6 +30,7 @@ from compiler.chains import range_doppler_chain
 from compiler.compile import compile_graph
 from radar.config import preset
 from radar.scene import SCENE_PRESETS, simulate_frames
+from radarsnn.bench import interleaved_medians
 
 
 def _previous(plan, pid, arrivals, n_frames, first):
@@ -40,19 +40,6 @@ def _previous(plan, pid, arrivals, n_frames, first):
     return solve_resonator(plan.neurons[pid],
                            lambda s0, s1: drive(arrivals, s0, s1, n_frames, pop.dims, dtype),
                            n_frames * pop.size, first, charge)
-
-
-def _in_turn(fns: dict, repeats: int) -> dict[str, float]:
-    """Median seconds of each of ``fns``, their calls taken in turn (after one warm-up each)."""
-    for fn in fns.values():
-        fn()
-    times: dict[str, list[float]] = {name: [] for name in fns}
-    for _ in range(repeats):
-        for name, fn in fns.items():
-            t0 = time.perf_counter()
-            fn()
-            times[name].append(time.perf_counter() - t0)
-    return {name: statistics.median(ts) for name, ts in times.items()}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -80,7 +67,7 @@ def main(argv: list[str] | None = None) -> None:
                "before_plans": before,
                **{k: v for k, v in floor_calls([], rotations=rotation_floors(plans)).items()
                   if k == "floor"}}
-        s = _in_turn(fns, args.repeats)
+        s = interleaved_medians(fns, args.repeats)
         t0 = time.perf_counter()
         new = run_program(program, many, plans=plans, **kw)
         s["after_frames"] = time.perf_counter() - t0

@@ -36,24 +36,11 @@ def test_every_list_of_modes_is_the_one_in_run_options():
 
 
 def _tiny():
-    from compiler.snn import (
-        Encoder,
-        LatencyCode,
-        MatrixProjection,
-        NeuronParams,
-        Population,
-        SpikingNetwork,
-    )
+    from compiler.snn import LatencyCode, NeuronParams
+    from compiler.snn.examples import tiny_network
 
-    return SpikingNetwork(
-        name="tiny", n_steps=6,
-        populations=[Population(id="in", shape={"i": 2}, source=True),
-                     Population(id="out", shape={"o": 1},
-                                params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"))],
-        projections=[MatrixProjection(id="w", source="in", target="out", contract=("i",),
-                                      produce=("o",), weights=np.ones((2, 1)))],
-        encoders=[Encoder(port="x", population="in",
-                          code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
+    return tiny_network(n_steps=6, params=NeuronParams(du=0.0, v_th=3.0, reset="fire_once"),
+                        code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))
 
 
 @pytest.mark.parametrize("options, message", [

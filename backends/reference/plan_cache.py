@@ -15,16 +15,8 @@ A weight array changed in place is not seen (as with a plan passed explicitly); 
 
 Examples
 --------
->>> import numpy as np
->>> from compiler.snn import (Encoder, LatencyCode, MatrixProjection, Population,
-...                           SpikingNetwork)
->>> net = SpikingNetwork(name="n", n_steps=4,
-...     populations=[Population(id="a", shape={"i": 2}, source=True),
-...                  Population(id="b", shape={"o": 1})],
-...     projections=[MatrixProjection(id="w", source="a", target="b", contract=("i",),
-...                                   produce=("o",), weights=np.ones((2, 1)))],
-...     encoders=[Encoder(port="x", population="a",
-...                       code=LatencyCode(t_max=4, x_min=0.0, x_max=1.0))])
+>>> from compiler.snn.examples import tiny_network
+>>> net = tiny_network(n_steps=4)
 >>> peek_plan(net, "float64") is None
 True
 >>> plan = cached_plan(net, "float64")
