@@ -58,6 +58,8 @@ def _bench_runner(args: argparse.Namespace, run_bench):
 
 def add_parsers(sub) -> None:
     """Add ``demo`` and ``bench`` to ``sub``."""
+    from backends.reference.run_options import ENGINE_MODES  # the modes' one home
+
     p = sub.add_parser("demo", help="simulated scenes through the conventional and spiking chain")
     p.add_argument("--seed", type=int, default=0, help="scene noise seed (default 0)")
     p.add_argument("--preset", action="append", choices=["seed003", "carrada"],
@@ -80,7 +82,7 @@ def add_parsers(sub) -> None:
     p.add_argument("--repeats", type=int, default=5, help="timed runs per figure (median)")
     p.add_argument("--step-repeats", type=int, help="timed runs of step mode (default --repeats)")
     p.add_argument("--threads", type=int, default=1, help="BLAS threads (default 1: one core)")
-    p.add_argument("--mode", action="append", choices=["closed", "step"],
+    p.add_argument("--mode", action="append", choices=ENGINE_MODES,
                    help="engines to time (default both)")
     p.add_argument("--no-brian2", action="store_true", help="skip the Brian2 comparison")
     p.add_argument("--no-user-path", action="store_true",

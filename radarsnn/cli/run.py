@@ -154,6 +154,8 @@ def clipped_warning(clipped: dict[str, int]) -> str:
 
 def add_parsers(sub) -> None:
     """Add ``run`` to ``sub``."""
+    from backends.reference.run_options import MODES  # the modes' one home (numpy: only here)
+
     p = sub.add_parser("run", help="simulate a compiled artifact on inputs (.npy, .npz, .mat, "
                                    "TI .bin)")
     p.add_argument("artifact", type=Path, metavar="ARTIFACT_DIR",
@@ -163,7 +165,7 @@ def add_parsers(sub) -> None:
                    help=f"input array per port, each port once: {INPUT_FORMS} (repeat for "
                         "several ports)")
     bin_layout_argument(p)
-    p.add_argument("--mode", choices=["step", "closed", "auto"], default="auto",
+    p.add_argument("--mode", choices=MODES, default="auto",
                    help="simulation engine: step (every time step), closed (the spike steps "
                         "of a fire-once feed-forward network computed directly), auto (closed "
                         "for a network that is eligible, else step; the default)")

@@ -47,6 +47,7 @@ from pydantic import (
     model_validator,
 )
 
+from backends.reference.run_options import MODES
 from ir.errors import CompileError
 from ir.model import short_repr
 from radarsnn.sweep.sections import FigureSpec, FolderFrames, MetricSpec, SceneFrames, _Model
@@ -92,7 +93,7 @@ class SweepSpec(_Model):
     target: str | None = None
     calibration: Literal["static", "per-input"] = "static"
     options: dict[str, Any] = Field(default_factory=dict)
-    mode: Literal["step", "closed", "auto"] = "step"
+    mode: Literal[MODES] = "step"  # the simulator's modes, from their one home
     out_of_range: Literal["clip", "reject"] = "clip"
     input: str | None = None
     frames: Annotated[SceneFrames | FolderFrames, Field(discriminator="source")]
