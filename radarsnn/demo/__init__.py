@@ -7,7 +7,8 @@ default) the way a user's compile does — measured on a held-back calibration f
 motifs chosen to keep the accuracy contract and the frame deadline — on the
 reference simulator, and reports the per-stage accuracy lines of the compile, the
 detections of both against the ground truth, the spiking detections against the
-conventional ones, the S-FT RMSE and the resource report
+conventional ones, the spectrum RMSE (the spiking DFTs against the exact spectrum) and the
+resource report
 (:mod:`radarsnn.demo.scenes`); a target on which no configuration holds or fits
 (carrada on one ``loihi2`` chip) shows the compiler's refusal instead.  With ``out_dir`` it writes
 figures and a one-page Markdown summary (:mod:`radarsnn.demo.figures`).
@@ -97,7 +98,7 @@ class DemoReport:
                     f"{s.spiking_n_false} elsewhere; cells vs conventional: sensitivity "
                     f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)} "
                     f"({s.cells_spiking} spiking / {s.cells_conventional} conventional cells); "
-                    f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}")
+                    f"spectrum RMSE {_fmt(s.sft_rmse, '.4f')}")
             if s.target is not None:
                 r = s.resources
                 if r:
@@ -138,7 +139,7 @@ class DemoReport:
                 lines += [f"- spiking: {s.spiking_n_found}/{s.n_targets} targets, "
                           f"{s.spiking_n_false} false alarm peaks; cell sensitivity "
                           f"{_fmt(s.cell_sensitivity)}, precision {_fmt(s.cell_precision)}; "
-                          f"S-FT RMSE {_fmt(s.sft_rmse, '.4f')}",
+                          f"spectrum RMSE {_fmt(s.sft_rmse, '.4f')}",
                           f"- resources: {totals_line(s.resources)}"]
                 if "latency_frame_period_s" in s.resources:
                     lines += [f"- real time: {_latency(s.resources)}"]

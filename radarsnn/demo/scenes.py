@@ -16,8 +16,9 @@ detections against the conventional ones cell by cell:
           \\text{precision} = \\frac{|S \\cap C|}{|S|}
 
 with :math:`S` the spiking and :math:`C` the conventional detected cells.  The
-S-FT RMSE is :func:`~compiler.lowering.dft_common.modulus_rmse` of the 2-D
-spectrum (moduli min–max normalised over the whole map).
+spectrum RMSE (whichever DFT motif) is
+:func:`~compiler.lowering.dft_common.modulus_rmse` of the 2-D spectrum (moduli min–max
+normalised over the whole map).
 """
 
 from __future__ import annotations
