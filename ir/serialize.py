@@ -63,6 +63,7 @@ from ir.parsing import load_json, load_yaml
 
 __all__ = [
     "describe_yaml_error",
+    "load_yaml_mapping",
     "graph_from_dict",
     "graph_from_json",
     "graph_from_yaml",
@@ -279,6 +280,36 @@ def describe_yaml_error(err: yaml.YAMLError) -> str:
     context = getattr(err, "context", None)
     where = f"line {mark.line + 1}, column {mark.column + 1}"
     return f"{where}: {problem}" + (f" ({context})" if context else "")
+
+
+def load_yaml_mapping(text: str, label: str, fields: str, *,
+                      error: type[IRError] | type[Exception] = ChainFileError) -> dict:
+    """The mapping a YAML file holds (a profile, a sweep), parsed within the bounds of
+    :func:`ir.parsing.load_yaml`; every failure one ``error`` line prefixed by ``label``.
+
+    Examples
+    --------
+    >>> load_yaml_mapping("a: 1", "f.yaml", "fields")
+    {'a': 1}
+    >>> load_yaml_mapping("[1, 2]", "f.yaml", "profile fields")
+    Traceback (most recent call last):
+    ...
+    ir.errors.ChainFileError: f.yaml: expected a mapping of profile fields, got list
+    >>> try:
+    ...     load_yaml_mapping("a: [1,\\nb: 2}", "f.yaml", "fields")
+    ... except ChainFileError as err:
+    ...     print(str(err)[:41])
+    f.yaml: not valid YAML: line 2, column 5:
+    """
+    try:
+        data = load_yaml(text, error=error)
+    except yaml.YAMLError as err:
+        raise error(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
+    except error as err:
+        raise error(f"{label}: {err}") from err
+    if not isinstance(data, dict):
+        raise error(f"{label}: expected a mapping of {fields}, got {type(data).__name__}")
+    return data
 
 
 # -- JSON ---------------------------------------------------------------------------------

@@ -35,9 +35,7 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from compiler.hardware.number_format import NUMBER_FORMAT_FIELDS
@@ -49,8 +47,7 @@ from compiler.hardware.profile import (
 )
 from ir.errors import CompileError
 from ir.model import short_repr
-from ir.parsing import load_yaml
-from ir.serialize import describe_yaml_error
+from ir.serialize import load_yaml_mapping
 
 __all__ = ["load_profile"]
 
@@ -132,15 +129,8 @@ def _check_flag(data: dict, label: str) -> bool:
 
 def _from_text(text: str, label: str) -> HardwareProfile:
 
-    try:  # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
-        data: Any = load_yaml(text, error=CompileError)
-    except yaml.YAMLError as err:
-        raise CompileError(f"{label}: not valid YAML: {describe_yaml_error(err)}") from err
-    except CompileError as err:
-        raise CompileError(f"{label}: {err}") from err
-    if not isinstance(data, dict):
-        raise CompileError(f"{label}: expected a mapping of profile fields, got "
-                           f"{type(data).__name__}")
+    # bounded: nesting, aliases expanded, duplicate keys (ir.parsing)
+    data = load_yaml_mapping(text, label, "profile fields", error=CompileError)
     board = data.get("chip_profile") is not None
     if board:  # a board: its chip's budgets, never loosened
         from compiler.hardware.boards import board_fields  # boards imports this module

@@ -40,7 +40,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
 from pydantic import (
     Field,
     ValidationError,
@@ -241,24 +240,19 @@ def load_spec(path: str | Path) -> SweepSpec:
     >>> load_spec("examples/sweeps/small.yaml").name
     'small'
     """
-    from ir.parsing import load_yaml
+    from ir.serialize import load_yaml_mapping
 
     path = Path(path)
     try:
         if not path.is_file() or path.stat().st_size > MAX_SWEEP_FILE_BYTES:
             raise CompileError(f"sweep file {str(path)!r} cannot be read: not a regular file "
                                f"of at most {MAX_SWEEP_FILE_BYTES} bytes")
-        data = load_yaml(path.read_text(encoding="utf-8"), error=CompileError)
+        text = path.read_text(encoding="utf-8")
     except (OSError, ValueError) as err:  # UnicodeDecodeError; a NUL byte in the path
         why = getattr(err, "strerror", None) or err
         raise CompileError(f"sweep file {str(path)!r} cannot be read: {why}") from None
-    except yaml.YAMLError as err:
-        raise CompileError(f"sweep file {str(path)!r}: not valid YAML: {err}") from None
-    except CompileError as err:
-        raise CompileError(f"sweep file {str(path)!r}: {err}") from None
-    if not isinstance(data, dict):
-        raise CompileError(f"sweep file {str(path)!r}: expected a mapping of sweep fields, got "
-                           f"{type(data).__name__}")
+    data = load_yaml_mapping(text, f"sweep file {str(path)!r}", "sweep fields",
+                             error=CompileError)
     data.setdefault("base_dir", str(path.parent))
     return parse_spec(data, label=f"sweep file {str(path)!r}")
 
