@@ -36,6 +36,7 @@ from compiler.accuracy.simulator import Simulator
 from compiler.compile_guards import check_compile, limits_from_options
 from compiler.hardware import NO_TARGET, HardwareProfile, load_profile
 from compiler.lowering import LoweringRegistry, default_registry
+from compiler.memo import CompileMemo
 from compiler.option_checks import check_options
 from compiler.passes import CompileContext, run_pipeline
 from compiler.passes.base import Progress
@@ -198,12 +199,14 @@ def _compile_checked(graph: Graph, *, motifs: dict, calibration_inputs: dict, ch
                            "check_inputs (or accuracy='off' to compile unmeasured)")
 
     calibrations: list = []  # CompileContext.calibrations: the attempts' frames measured once
+    memo = CompileMemo()  # CompileContext.memo: the attempts' other shared work, done once
 
     def build(auto_motifs: dict[str, str], auto_options: dict[str, Any]) -> CompiledProgram:
         # the user's motifs and options win over the rungs'
         return _compile_once(graph, motifs={**auto_motifs, **motifs}, calibration_inputs=fit,
                              time_steps=time_steps, weight_bits=weight_bits, **once,
-                             options={**auto_options, **options}, calibrations=calibrations)
+                             options={**auto_options, **options}, calibrations=calibrations,
+                             memo=memo)
 
     runs: list[tuple[CompiledProgram, Any]] = []  # each program measured, with its run
 
@@ -236,7 +239,8 @@ def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
                   evaluators: EvalRegistry | None = None,
                   progress: Progress | None = None,
                   options: Mapping[str, Any] | None = None,
-                  calibrations: list | None = None) -> CompiledProgram:
+                  calibrations: list | None = None,
+                  memo: CompileMemo | None = None) -> CompiledProgram:
     """One compile with the motifs given (compile_graph without a simulator)."""
     unknown = sorted(set(options or {}) - set(EXTRA_OPTIONS))
     if unknown:
@@ -258,7 +262,8 @@ def _compile_once(graph: Graph | str | Path, target: HardwareProfile | None, *,
     ctx = CompileContext(target=profile,
                          calibration_inputs=dict(calibration_inputs or {}),
                          lowering=registry or default_registry(),
-                         evaluators=dict(evaluators or {}), calibrations=calibrations)
+                         evaluators=dict(evaluators or {}), calibrations=calibrations,
+                         memo=memo)
     if progress is not None:
         if not callable(progress):
             raise CompileError(f"compile_graph: progress={progress!r:.60} is not callable; give "

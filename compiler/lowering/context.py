@@ -26,6 +26,7 @@ from compiler.hardware.neuron_features import check_population
 from compiler.lowering.builder import NetworkBuilder
 from compiler.lowering.registry import HOST, LoweringRegistry
 from compiler.lowering.values import HostValue, SpikeValue, Value
+from compiler.memo import CompileMemo
 from compiler.program import Segment
 from compiler.snn import (
     N_PARTS,
@@ -81,6 +82,9 @@ class LoweringContext:
     host_pinned : frozenset of str
         Nodes lowered on the host unless the user chose a motif for that node id (the
         static split's host path and its moving input).
+    memo : CompileMemo, optional
+        Work shared with the other attempts of a measured compile (:mod:`compiler.memo`);
+        None: every result is computed.
     """
 
     graph: Graph
@@ -91,6 +95,7 @@ class LoweringContext:
     target: HardwareProfile = NO_TARGET
     moving: frozenset[str] = frozenset()
     host_pinned: frozenset[str] = frozenset()
+    memo: CompileMemo | None = None
     types: dict[str, TensorType] = field(init=False)
     values: dict[str, Value] = field(init=False, default_factory=dict)
     _plan: list[_Open | str] = field(init=False, default_factory=list)

@@ -164,7 +164,7 @@ def time_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: list[
             guarded = with_guard(sched, n_guard, guard, whole)
         return _excess(ctx, guarded, top), (guarded, errors, guard)
 
-    fitted = coarsen(node, inputs, stacked, code_in, bits, bool(whole), fit)
+    fitted = coarsen(node, inputs, stacked, code_in, bits, bool(whole), fit, memo=ctx.memo)
     levels, rounding, unit, bits = fitted.levels, fitted.rounding, fitted.unit, fitted.bits
     sched, errors, guard = fitted.fitted
     e_in, e_out = code_in.end, code_in.end + t

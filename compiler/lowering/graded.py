@@ -47,7 +47,7 @@ def graded_layer(ctx: LoweringContext, node: str, code_in: TimeCode, inputs: lis
             guard /= 2
         return v_full * guard / limit, (v_full, guard)
 
-    fitted = coarsen(node, inputs, stacked, code_in, bits, whole, fit)
+    fitted = coarsen(node, inputs, stacked, code_in, bits, whole, fit, memo=ctx.memo)
     levels, rounding, unit, bits = fitted.levels, fitted.rounding, fitted.unit, fitted.bits
     v_full, guard = fitted.fitted
     e_in = code_in.end

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from compiler.lowering.context import LoweringContext
+from compiler.memo import CompileMemo
 from compiler.quantize_weights import rint_feedback, rint_keep_sums
 from compiler.snn import N_PARTS
 from ir.errors import CompileError
@@ -43,22 +44,26 @@ def membrane_unit(node: str, q: float, code_in: TimeCode) -> float:
     return unit
 
 
-def round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
-                  ) -> tuple[np.ndarray, list[str]]:
+def round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int,
+                 memo: CompileMemo | None = None) -> tuple[np.ndarray, list[str]]:
     """Levels of every input matrix for an integer target, and the rule used per input.
 
     With the calibrated second moment of the input (``feedback``,
     :func:`~compiler.quantize_weights.rint_feedback`) the rounding error is kept off the
     strong inputs that repeat in the calibration data; otherwise (``keep_sums``,
     :func:`~compiler.quantize_weights.rint_keep_sums`) each column's response to a
-    constant input — static returns over chirps or samples — stays exact.
+    constant input — static returns over chirps or samples — stays exact.  With a
+    ``memo`` (:class:`~compiler.memo.CompileMemo`) a rounding already done on equal
+    arguments is reused.
     """
     out, rules = [], []
     for inp in inputs:
         m = inp.matrix / q
         h = inp.second_moment
         if h is not None and h.shape == (m.shape[0], m.shape[0]):
-            out.append(rint_feedback(m, h, w_max).ravel())
+            rounded = rint_feedback(m, h, w_max) if memo is None else \
+                memo.rint_feedback(m, h, w_max)
+            out.append(rounded.ravel())
             rules.append("feedback")
         else:
             # rows are (position, part), parts last; an input with fewer rows than the
@@ -71,11 +76,12 @@ def round_levels(inputs: list[LayerInput], q: float, parts: int, w_max: int
 
 
 def layer_levels(inputs: list[LayerInput], stacked: np.ndarray, q: float, whole: bool,
-                 parts: int, w_max: int) -> tuple[np.ndarray, list[str]]:
-    """The weight levels of a layer at step ``q``: nearest, or :func:`round_levels` when
-    the target's weights are integers (``whole``)."""
+                 parts: int, w_max: int, memo: CompileMemo | None = None
+                 ) -> tuple[np.ndarray, list[str]]:
+    """The weight levels of a layer at step ``q``: nearest, or :func:`round_levels` (with
+    ``memo``) when the target's weights are integers (``whole``)."""
     if whole:  # integer weights: keep the rounding error off the strong static inputs
-        return round_levels(inputs, q, parts, w_max)
+        return round_levels(inputs, q, parts, w_max, memo)
     return np.rint(stacked / q), ["nearest"] * len(inputs)
 
 
@@ -104,21 +110,22 @@ class Coarsened:
 
 
 def coarsen(node: str, inputs: list[LayerInput], stacked: np.ndarray, code_in: TimeCode,
-            bits: int, whole: bool, fit: Callable[[float], tuple[float, Any]]) -> Coarsened:
+            bits: int, whole: bool, fit: Callable[[float], tuple[float, Any]], *,
+            memo: CompileMemo | None = None) -> Coarsened:
     """Fewer weight levels until the layer fits its target.
 
     Starting from ``2**(bits-1) - 1`` levels for the largest weight, ``fit(unit)`` gives
     the *excess* (the largest value the neuron must hold over what the target holds,
     ``<= 1`` fits) and its own result for a membrane unit; the top level is divided by
     the excess (1 % margin) and the levels recomputed, at most 8 times or down to one
-    level.
+    level.  ``memo``: :func:`round_levels`'.
     """
     parts = max(1, N_PARTS[code_in.split])
     peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
     top_level = 2 ** (bits - 1) - 1
     for _ in range(8):
         q = peak / top_level
-        levels, rounding = layer_levels(inputs, stacked, q, whole, parts, top_level)
+        levels, rounding = layer_levels(inputs, stacked, q, whole, parts, top_level, memo)
         unit = membrane_unit(node, q, code_in)
         excess, fitted = fit(unit)
         if excess <= 1.0 or top_level == 1:

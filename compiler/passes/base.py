@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from compiler.hardware import NO_TARGET, HardwareProfile, load_profile
+from compiler.memo import CompileMemo
 from compiler.program import CompiledProgram
 from ir.errors import CompileError
 
@@ -76,6 +77,9 @@ class CompileContext:
         Calibrations measured on these ``calibration_inputs`` by earlier compiles of the
         same chain, for the calibrate pass to reuse (a measured compile's attempts share
         one list: :func:`compiler.passes.calibrate.Calibrate`); None: measure every time.
+    memo : CompileMemo, optional
+        Work shared by the attempts of one measured compile (:mod:`compiler.memo`: the
+        DFT weights' rounding, equal networks, their splits); None: everything is computed.
     """
 
     target: HardwareProfile = NO_TARGET
@@ -84,6 +88,7 @@ class CompileContext:
     evaluators: Mapping[type, Callable[..., Any]] = field(default_factory=dict)
     progress: Progress = _silent
     calibrations: list | None = None
+    memo: CompileMemo | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.target, HardwareProfile):

@@ -56,7 +56,8 @@ class Lower(Pass):
                                settings={type(s): s for s in self.settings},
                                calibration=getattr(calibration, "nodes", calibration),
                                target=ctx.target, host_pinned=frozenset(host_nodes(split)),
-                               moving=frozenset(n for r in split for n in r["moving"]))
+                               moving=frozenset(n for r in split for n in r["moving"]),
+                               memo=ctx.memo)
         program.segments = lower_graph(lctx)
         program.records.lowering = {
             "motifs": {n: lctx.motif_for(n) for n in program.graph.topological_order()},

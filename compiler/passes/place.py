@@ -256,7 +256,8 @@ class Place(Pass):
         profile = ctx.target
         mode = self.repetitions
         networks = program.networks
-        splits = program.records.splits or split_program(networks, profile, mode)
+        splits = program.records.splits or split_program(networks, profile, mode,
+                                                         memo=ctx.memo)
         cands = multiplex_candidates(networks, profile)
         while True:
             try:
@@ -271,7 +272,7 @@ class Place(Pass):
                 ctx.progress(self.name, f"multiplexing {n + 1} stage(s)")
                 log.info("the blocks did not pack (%s); time-multiplexing %d stage(s)",
                          err, n + 1)
-                splits = split_program(networks, profile, mode, start=n + 1)
+                splits = split_program(networks, profile, mode, start=n + 1, memo=ctx.memo)
         program.records.splits = splits
         program.records.placement = placement
         return program

@@ -336,6 +336,9 @@ def quantize(network: SpikingNetwork, profile: HardwareProfile | str = "unbounde
 class Quantize(Pass):
     """Quantize every spiking segment's network to the target; record ``records["quantize"]``.
 
+    With ``ctx.memo`` a quantized network equal to one an earlier attempt of the measured
+    compile built is that network (:meth:`compiler.memo.CompileMemo.network`).
+
     Attributes
     ----------
     long_delays : {"relay", "error"}
@@ -353,6 +356,8 @@ class Quantize(Pass):
         for seg in program.segments:
             if seg.kind == "spiking" and seg.network is not None:
                 net, rec = quantize(seg.network, profile, long_delays=mode)
+                if ctx.memo is not None:  # an earlier attempt's equal network, reused
+                    net = ctx.memo.network(net)
                 seg = Segment(kind=seg.kind, inputs=seg.inputs, outputs=seg.outputs,
                               network=net, node=seg.node)
                 records.append(rec)

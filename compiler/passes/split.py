@@ -49,6 +49,7 @@ import numpy as np
 from compiler.hardware import BUDGETS, Blocks, HardwareProfile, load_profile
 from compiler.hardware.demand import Demand, demand_model, synapse_instances
 from compiler.hardware.repetition import Stage, instance_neurons, stage_key, stages
+from compiler.memo import CompileMemo
 from compiler.passes.base import CompileContext, Pass
 from compiler.passes.split_budget import check_totals, explain_failure, fits, too_big
 from compiler.passes.split_plan import (
@@ -189,7 +190,8 @@ def _split_network(network: SpikingNetwork, profile: HardwareProfile,
 
 
 def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile | str = "unbounded",
-                  repetitions: str = "auto", *, start: int = 0) -> list[SplitRecord]:
+                  repetitions: str = "auto", *, start: int = 0,
+                  memo: CompileMemo | None = None) -> list[SplitRecord]:
     """Split all networks of a program (resident together) under a repetition mode.
 
     Parameters
@@ -206,6 +208,9 @@ def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile |
     start : int
         ``auto``: the number of candidates to multiplex at least (the place pass
         raises it when the blocks do not pack onto the cores).
+    memo : CompileMemo, optional
+        A network's split under the same stages multiplexed, kept from an earlier
+        attempt of a measured compile (:meth:`compiler.memo.CompileMemo.split`).
 
     Returns
     -------
@@ -242,7 +247,11 @@ def split_program(networks: Sequence[SpikingNetwork], profile: HardwareProfile |
             continue
         records, used = [], np.zeros(len(BUDGETS))
         for net, mux, sts in zip(networks, chosen, stage_lists, strict=True):
-            records.append(_split_network(net, profile, mux, sts))
+            if memo is None:
+                records.append(_split_network(net, profile, mux, sts))
+            else:
+                records.append(memo.split(net, profile, mux, lambda net=net, mux=mux, sts=sts:
+                                          _split_network(net, profile, mux, sts)))
             used += sum(_known(d, cap).sum(axis=0) for d in records[-1].demand.values())
             # a core is charged the sum of its blocks: a sum over all cores' limits never fits
             if n != counts[-1] and np.any(used > cap):
@@ -279,5 +288,6 @@ class Split(Pass):
         profile = ctx.target
         mode = self.repetitions
         ctx.progress(self.name, f"{len(program.networks)} network(s), repetitions={mode}")
-        program.records.splits = split_program(program.networks, profile, mode)
+        program.records.splits = split_program(program.networks, profile, mode,
+                                               memo=ctx.memo)
         return program

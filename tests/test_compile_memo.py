@@ -1,0 +1,161 @@
+"""A measured compile does shared work once, and compiles the same bytes (issue 35).
+
+The attempts of a measured compile share one :class:`compiler.memo.CompileMemo`: the
+time-coded DFT's rounding (``rint_feedback``), networks equal in content (reused objects,
+so their blocks' demand and simulation plans are kept) and their splits.  The memo must
+change how often the work is done, never what it gives: the program, the placement and
+the motif selection of a compile with the memo are those of one that recomputes it all.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import compiler.compile as compile_module
+from backends import save
+from backends.reference import ReferenceSimulator
+from compiler.memo import CompileMemo, network_digest
+from compiler.quantize_weights import rint_feedback
+from compiler.snn.examples import tiny_network
+from ir import Graph
+from radar.config import preset
+from radar.scene import SCENE_PRESETS, simulate_frame
+
+CHAIN = "examples/chains/carrada_rd_oscfar.yaml"
+
+
+class _Recorded(CompileMemo):
+    """The memo, remembered so the test can read its hits."""
+
+    made: list[CompileMemo] = []
+
+    def __init__(self) -> None:
+        super().__init__()
+        _Recorded.made.append(self)
+
+
+class _NoReuse(CompileMemo):
+    """A memo that computes every result again (what a compile without one does)."""
+
+    def rint_feedback(self, x, h, w_max):
+        return rint_feedback(x, h, w_max)
+
+    def network(self, network):
+        return network
+
+    def split(self, network, profile, multiplexed, compute):
+        return compute()
+
+
+def _artifact_bytes(program, folder) -> dict[str, bytes]:
+    save(program, folder)
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _frames(graph: Graph) -> np.ndarray:
+    from radarsnn.bench import chain_inputs
+
+    config, scene = preset("carrada"), SCENE_PRESETS["carrada"]()
+    return np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
+                     for s in range(1, 4)])
+
+
+def test_the_memo_compiles_the_bytes_of_a_compile_without_it(tmp_path, monkeypatch):
+    graph = Graph.from_yaml(CHAIN)
+    cal = {"adc": _frames(graph)}
+    _Recorded.made.clear()
+    monkeypatch.setattr(compile_module, "CompileMemo", _Recorded)
+    shared = compile_module.compile_graph(graph, "kapoho_point", calibration_inputs=cal,
+                                          simulator=ReferenceSimulator())
+    (memo,) = _Recorded.made
+    assert all(n > 0 for n in memo.hits.values()), memo.hits  # every kind was reused
+    monkeypatch.setattr(compile_module, "CompileMemo", _NoReuse)
+    alone = compile_module.compile_graph(graph, "kapoho_point", calibration_inputs=cal,
+                                         simulator=ReferenceSimulator())
+    selection = shared.records.extra["motif_selection"]
+    assert len(selection["attempts"]) > 1
+    assert selection == alone.records.extra["motif_selection"]
+    assert shared.records.accuracy.to_dict() == alone.records.accuracy.to_dict()
+    assert shared.records.placement.to_dict() == alone.records.placement.to_dict()
+    assert np.array_equal(shared.records.placement.core, alone.records.placement.core)
+    for a, b in zip(shared.records.splits, alone.records.splits, strict=True):
+        assert a.multiplexed == b.multiplexed and a.stage_of == b.stage_of
+        assert list(a.demand) == list(b.demand)
+        for pid in a.demand:
+            assert np.array_equal(a.demand[pid].amounts, b.demand[pid].amounts)
+            assert np.array_equal(a.demand[pid].blocks.edges, b.demand[pid].blocks.edges)
+    assert _artifact_bytes(shared, tmp_path / "shared") == _artifact_bytes(alone,
+                                                                         tmp_path / "alone")
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 5), st.integers(0, 2 ** 32 - 1),
+       st.sampled_from([1.0, 3.0, 127.0]))
+def test_the_memo_rounds_as_rint_feedback_bit_for_bit(n_in, n_out, seed, w_max):
+    rng = np.random.default_rng(seed)
+    x = rng.normal(scale=w_max, size=(n_in, n_out))
+    v = rng.normal(size=(n_in, 2 * n_in))
+    h = v @ v.T
+    memo = CompileMemo()
+    first = memo.rint_feedback(x, h, w_max)
+    want = rint_feedback(x, h, w_max)
+    assert first.tobytes() == want.tobytes() and first.dtype == want.dtype
+    again = memo.rint_feedback(x.copy(), h.copy(), w_max)
+    assert again is first and memo.hits["rint_feedback"] == 1
+    assert not first.flags.writeable  # nobody can change what a later attempt reads
+    other = x.copy()
+    other[0, 0] += 0.5
+    assert memo.rint_feedback(other, h, w_max).tobytes() == rint_feedback(other, h,
+                                                                          w_max).tobytes()
+    assert memo.rint_feedback(x, h, w_max + 1) is not first
+
+
+@settings(max_examples=25, deadline=None)
+@given(arrays(np.float64, (3, 2), elements=st.floats(-4, 4, allow_nan=False)))
+def test_the_network_digest_follows_every_weight(weights):
+    net = tiny_network(n_steps=4)
+    (proj,) = [p for p in net.projections if hasattr(p, "weights")][:1]
+    changed = dataclasses.replace(proj, weights=np.asarray(proj.weights) + 1.0)
+    other = tiny_network(n_steps=4)
+    other.projections = [changed if p is proj else p for p in net.projections]
+    assert network_digest(net) == network_digest(tiny_network(n_steps=4))
+    assert network_digest(other) != network_digest(net)
+    memo = CompileMemo()
+    assert memo.network(net) is net and memo.network(other) is other
+    assert memo.network(tiny_network(n_steps=4)) is net and memo.hits["network"] == 1
+
+
+def test_the_digest_keeps_axis_order_and_refuses_what_it_cannot_read():
+    a, b = tiny_network(n_steps=4), tiny_network(n_steps=4)
+    b.meta = {"x": 1, "y": 2}
+    a.meta = {"y": 2, "x": 1}
+    assert network_digest(a) != network_digest(b)
+    a.meta = {"opaque": object()}
+    assert network_digest(a) is None
+    memo = CompileMemo()
+    assert memo.network(a) is a and memo.network(a) is a and memo.hits["network"] == 0
+
+
+def test_a_split_is_kept_per_network_profile_and_stages():
+    memo, net, calls = CompileMemo(), tiny_network(n_steps=4), []
+
+    def compute():
+        calls.append(1)
+        return object()
+
+    first = memo.split(net, "p", ("a",), compute)
+    assert memo.split(net, "p", ("a",), compute) is first and len(calls) == 1
+    assert memo.split(net, "p", ("a", "b"), compute) is not first
+    assert memo.split(tiny_network(n_steps=4), "p", ("a",), compute) is not first
+    assert len(calls) == 3
+
+
+if __name__ == "__main__":
+    pytest.main([__file__])
