@@ -16,7 +16,10 @@ result for the attempts after it:
   is kept per network object (its blocks' demand, :mod:`compiler.hardware.demand`; the
   reference simulator's plans) is reused;
 * :meth:`CompileMemo.split` — the split of the same network object under the same
-  profile and multiplexed stages is computed once.
+  profile and multiplexed stages is computed once;
+* :meth:`CompileMemo.kept` — any other result of the same objects and values, e.g. a
+  network's spike traffic when its blocks sit on the same cores
+  (:func:`compiler.passes.place_traffic.spike_traffic`).
 
 Every result is the one the work would produce again: the memo changes how often the work
 is done, never what it gives (a compile with a memo and one without give byte-identical
@@ -128,14 +131,15 @@ class CompileMemo:
     Attributes
     ----------
     hits : dict of str to int
-        How often each kind of work was reused (``rint_feedback``, ``network``, ``split``).
+        How often each kind of work was reused (``rint_feedback``, ``network``, ``split``,
+        ``traffic``).
     """
 
     hits: dict[str, int] = field(default_factory=lambda: {"rint_feedback": 0, "network": 0,
-                                                          "split": 0})
+                                                          "split": 0, "traffic": 0})
     _rounded: dict[tuple, np.ndarray] = field(default_factory=dict, repr=False)
     _networks: dict[str, SpikingNetwork] = field(default_factory=dict, repr=False)
-    _splits: dict[tuple, Any] = field(default_factory=dict, repr=False)
+    _kept: dict[tuple, Any] = field(default_factory=dict, repr=False)
 
     def rint_feedback(self, x: np.ndarray, h: np.ndarray, w_max: float) -> np.ndarray:
         """:func:`~compiler.quantize_weights.rint_feedback` ``(x, h, w_max)``, computed once
@@ -165,11 +169,16 @@ class CompileMemo:
               compute: Callable[[], Any]) -> Any:
         """``compute()`` — the split of ``network`` for ``profile`` with ``multiplexed``
         stages (these objects) — once per such triple."""
-        key = (id(network), id(profile), tuple(sorted(multiplexed)))
-        held = self._splits.get(key)
-        if held is not None and held[0] is network and held[1] is profile:  # ids their own
-            self.hits["split"] += 1
-            return held[2]
-        record = compute()
-        self._splits[key] = (network, profile, record)
-        return record
+        return self.kept("split", (network, profile), tuple(sorted(multiplexed)), compute)
+
+    def kept(self, kind: str, owners: tuple, key: Any, compute: Callable[[], Any]) -> Any:
+        """``compute()`` once per ``kind``, ``owners`` (these objects: a network, its
+        split record…) and ``key`` (hashable values); later calls return the same result."""
+        full = (kind, tuple(id(o) for o in owners), key)
+        held = self._kept.get(full)
+        if held is not None and all(a is b for a, b in zip(held[0], owners, strict=True)):
+            self.hits[kind] = self.hits.get(kind, 0) + 1  # the ids are still their own
+            return held[1]
+        value = compute()
+        self._kept[full] = (owners, value)
+        return value

@@ -52,6 +52,9 @@ class _NoReuse(CompileMemo):
     def split(self, network, profile, multiplexed, compute):
         return compute()
 
+    def kept(self, kind, owners, key, compute):
+        return compute()
+
 
 def _artifact_bytes(program, folder) -> dict[str, bytes]:
     save(program, folder)
@@ -141,6 +144,24 @@ def test_the_digest_keeps_axis_order_and_refuses_what_it_cannot_read():
     assert network_digest(a) is None
     memo = CompileMemo()
     assert memo.network(a) is a and memo.network(a) is a and memo.hits["network"] == 0
+
+
+def test_the_spike_traffic_of_a_placement_is_the_same_with_the_memo():
+    from compiler.hardware import load_profile
+    from compiler.hardware.reference_networks import dft_network
+    from compiler.passes.place import place
+    from compiler.passes.split import split_program
+
+    net, profile, memo = dft_network(), load_profile("loihi"), CompileMemo()
+    alone = place([net], split_program([net], profile), profile)
+    fresh = place([net], split_program([net], profile), profile, memo=memo)
+    assert memo.hits["traffic"] == 0  # another split record: nothing to reuse
+    splits = split_program([net], profile)
+    kept = [place([net], splits, profile, memo=memo) for _ in range(2)]
+    assert memo.hits["traffic"] == 1
+    assert alone.traffic == fresh.traffic == kept[0].traffic == kept[1].traffic
+    assert all(type(v) is type(alone.traffic[k]) for k, v in kept[1].traffic.items())
+    assert np.array_equal(alone.core, kept[1].core)
 
 
 def test_a_split_is_kept_per_network_profile_and_stages():

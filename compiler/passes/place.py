@@ -41,6 +41,7 @@ import numpy as np
 
 from compiler.hardware import BUDGETS, HardwareProfile, load_profile
 from compiler.hardware.activity import measured_spikes, spike_bound
+from compiler.memo import CompileMemo
 from compiler.passes.base import CompileContext, Pass
 from compiler.passes.place_chips import chip_assignment as assign_chips
 from compiler.passes.place_chips import chip_matrix
@@ -125,7 +126,8 @@ class Placement:
 
 def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | None = None,
           profile: HardwareProfile | str = "unbounded", *, placer: Placer = greedy_placer,
-          sim_results: Sequence | None = None, chip_assignment: str = "traffic") -> Placement:
+          sim_results: Sequence | None = None, chip_assignment: str = "traffic",
+          memo: CompileMemo | None = None) -> Placement:
     """Place the blocks of all ``networks`` (resident together) onto the profile's cores.
 
     Parameters
@@ -143,6 +145,9 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
     chip_assignment : {"traffic", "placer"}
         On several chips: group the used cores into chips to keep the heaviest traffic
         on-chip (:mod:`~compiler.passes.place_chips`), or keep ``core // cores_per_chip``.
+    memo : CompileMemo, optional
+        Results kept across the attempts of a measured compile (:mod:`compiler.memo`): a
+        network's spike traffic when its blocks sit on the same cores.
 
     Returns
     -------
@@ -208,7 +213,7 @@ def place(networks: Sequence[SpikingNetwork], splits: Sequence[SplitRecord] | No
     usage = np.zeros((n_used, 4))
     np.add.at(usage, core, demand_arr)
     util = np.where(np.isfinite(limits), usage / np.where(np.isfinite(limits), limits, 1), 0.0)
-    traffic = spike_traffic(networks, splits, offsets, core, cpc, spikes)
+    traffic = spike_traffic(networks, splits, offsets, core, cpc, spikes, memo=memo)
     traffic["basis"] = "measured" if sim_results is not None else "bound"
     chip = core // cpc if cpc else np.zeros_like(core)
     mux = [{"network": rec.network, "stage": key, "repetitions": r}
@@ -262,7 +267,7 @@ class Place(Pass):
         while True:
             try:
                 placement = place(networks, splits, profile, placer=self.placer,
-                                  chip_assignment=self.chip_assignment)
+                                  chip_assignment=self.chip_assignment, memo=ctx.memo)
                 break
             except BudgetError as err:
                 n = sum(len(r.multiplexed) for r in splits)

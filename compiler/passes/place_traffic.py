@@ -49,34 +49,57 @@ def block_affinity(splits, offsets) -> sp.csr_matrix:
     return m
 
 
-def spike_traffic(networks, splits, offsets, core, cores_per_chip, spikes) -> dict:
-    """Messages per frame of the placement ``core`` (see the module docstring)."""
-    host = inter = chip_x = buffered = 0.0
+def spike_traffic(networks, splits, offsets, core, cores_per_chip, spikes, *,
+                  memo=None) -> dict:
+    """Messages per frame of the placement ``core`` (see the module docstring).
+
+    With ``memo`` (:class:`compiler.memo.CompileMemo`) a network's terms are counted once
+    per network, split record, block offsets, cores of its blocks and spike rates; they
+    are added in the same order either way, so the sums are the same to the bit.
+    """
+    sums = {"host_input": 0.0, "inter_core": 0.0, "inter_chip": 0.0, "buffered": 0.0}
     for k, (net, rec) in enumerate(zip(networks, splits, strict=True)):
-        pops = net.population
-        for tgt, dem in rec.demand.items():
-            for src, (blk, neuron) in dem.reach.items():
-                dst = core[offsets[k][tgt] + blk]
-                keys = unique_keys(dst * pops[src].size + neuron)
-                dst, neuron = keys // pops[src].size, keys % pops[src].size
-                rate = spikes[k].get(src, 0.0) * rec.runs(tgt)
-                if src not in rec.demand:
-                    host += rate * dst.size
-                    continue
-                if not rec.on_chip(src, tgt):
-                    buffered += rate * dst.size
-                    continue
-                home = core[offsets[k][src] + rec.demand[src].blocks.block_of_neuron(neuron)]
-                away = home != dst
-                inter += rate * int(away.sum())
-                if cores_per_chip:
-                    chip_x += rate * int((away & (home // cores_per_chip
-                                                  != dst // cores_per_chip)).sum())
+        def count(net=net, rec=rec, k=k):
+            return _network_terms(net, rec, offsets[k], core, cores_per_chip, spikes[k])
+        if memo is None or not offsets[k]:
+            terms = count()
+        else:
+            lo = min(offsets[k].values())
+            hi = max(offsets[k][p] + d.blocks.n_blocks for p, d in rec.demand.items())
+            key = (tuple(offsets[k].items()), core[lo:hi].tobytes(), cores_per_chip,
+                   tuple(spikes[k].items()))
+            terms = memo.kept("traffic", (net, rec), key, count)
+        for name, value in terms:  # in the order the pairs were visited
+            sums[name] += value
     missing = sorted({f"{networks[k].name}/{pid}" for k, rec in enumerate(splits)
                       for pid, dem in rec.demand.items()
                       if networks[k].incoming(pid) and not dem.reach})
-    return {"host_input": host, "inter_core": inter, "inter_chip": chip_x,
-            "buffered": buffered, "not_counted": missing}
+    return {**sums, "not_counted": missing}
+
+
+def _network_terms(net, rec, offsets, core, cores_per_chip, spikes) -> list[tuple[str, float]]:
+    """The messages of one network's reached pairs, as ``(sum name, amount)`` in the order
+    :func:`spike_traffic` adds them."""
+    pops, out = net.population, []
+    for tgt, dem in rec.demand.items():
+        for src, (blk, neuron) in dem.reach.items():
+            dst = core[offsets[tgt] + blk]
+            keys = unique_keys(dst * pops[src].size + neuron)
+            dst, neuron = keys // pops[src].size, keys % pops[src].size
+            rate = spikes.get(src, 0.0) * rec.runs(tgt)
+            if src not in rec.demand:
+                out.append(("host_input", rate * dst.size))
+                continue
+            if not rec.on_chip(src, tgt):
+                out.append(("buffered", rate * dst.size))
+                continue
+            home = core[offsets[src] + rec.demand[src].blocks.block_of_neuron(neuron)]
+            away = home != dst
+            out.append(("inter_core", rate * int(away.sum())))
+            if cores_per_chip:
+                out.append(("inter_chip", rate * int((away & (home // cores_per_chip
+                                                              != dst // cores_per_chip)).sum())))
+    return out
 
 
 def core_messages(networks, splits, offsets, core, spikes) -> list[sp.csr_matrix]:
