@@ -10,7 +10,8 @@ One :class:`CompileMemo`, made by the measured compile and handed to every attem
 result for the attempts after it:
 
 * :meth:`CompileMemo.rint_feedback` — :func:`compiler.quantize_weights.rint_feedback` of
-  equal arguments (compared by content) is computed once;
+  equal arguments (compared by content) is computed once, and so is any array made from
+  arrays alone (:meth:`CompileMemo.of_arrays`: a DFT layer's real weight matrix);
 * :meth:`CompileMemo.network` — a quantized network equal in content to one an earlier
   attempt built (:func:`network_digest`) is replaced by that earlier object, so whatever
   is kept per network object (its blocks' demand, :mod:`compiler.hardware.demand`; the
@@ -153,6 +154,16 @@ class CompileMemo:
         out.setflags(write=False)
         self._rounded[key] = out
         return out
+
+    def of_arrays(self, kind: str, arrays: tuple[np.ndarray, ...], key: Any,
+                  compute: Callable[[], np.ndarray]) -> np.ndarray:
+        """``compute()`` — an array made from ``arrays`` and ``key`` alone — once per
+        content of ``arrays`` and ``key`` (the result is read-only)."""
+        def made() -> np.ndarray:
+            out = compute()
+            out.setflags(write=False)
+            return out
+        return self.kept(kind, (), (_arrays_key(*arrays), key), made)
 
     def network(self, network: SpikingNetwork) -> SpikingNetwork:
         """The first network seen equal in content to ``network`` (``network`` itself when

@@ -164,6 +164,28 @@ def test_the_spike_traffic_of_a_placement_is_the_same_with_the_memo():
     assert np.array_equal(alone.core, kept[1].core)
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 9), st.integers(1, 9), st.integers(0, 2 ** 32 - 1),
+       st.sampled_from(["none", "re_im", "signed", "re_im_signed"]))
+def test_the_memo_makes_a_dft_layers_real_weights_as_real_weights_does(n_out, n_in, seed,
+                                                                        in_split):
+    from compiler.lowering.dft_common import real_weights
+
+    rng = np.random.default_rng(seed)
+    w = rng.normal(size=(n_out, n_in)) + 1j * rng.normal(size=(n_out, n_in))
+    memo = CompileMemo()
+    made = memo.of_arrays("real_weights", (w,), (in_split, "re_im"),
+                          lambda: real_weights(w, in_split, "re_im"))
+    assert made.tobytes() == real_weights(w, in_split, "re_im").tobytes()
+    assert not made.flags.writeable
+    again = memo.of_arrays("real_weights", (w.copy(),), (in_split, "re_im"),
+                           lambda: real_weights(w, in_split, "re_im"))
+    assert again is made and memo.hits["real_weights"] == 1
+    other = memo.of_arrays("real_weights", (w,), (in_split, "signed"),
+                           lambda: real_weights(w, in_split, "signed"))
+    assert other is not made
+
+
 def test_a_split_is_kept_per_network_profile_and_stages():
     memo, net, calls = CompileMemo(), tiny_network(n_steps=4), []
 

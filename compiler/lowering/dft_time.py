@@ -235,6 +235,16 @@ def _out_split(complex_out: bool) -> PartLayout:
     return "re_im_signed" if complex_out else "signed"
 
 
+def _real_weights(ctx: LoweringContext, w: np.ndarray, in_split: str, out_split: str
+                  ) -> np.ndarray:
+    """:func:`~compiler.lowering.dft_common.real_weights`, once per measured compile for
+    equal arguments (``ctx.memo``)."""
+    if ctx.memo is None:
+        return real_weights(w, in_split, out_split)
+    return ctx.memo.of_arrays("real_weights", (np.asarray(w),), (in_split, out_split),
+                              lambda: real_weights(w, in_split, out_split))
+
+
 def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Value]) -> Value:
     """Rule of motif ``time`` for ``dft``, ``linear`` and ``window`` nodes (with stage gains)."""
     (x,) = inputs
@@ -253,7 +263,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
     start = None
     neurons = gain_mechanism(ctx) == "neurons"
     if gain_axis is None:
-        m0 = real_weights(w, code_in.split, split)
+        m0 = _real_weights(ctx, w, code_in.split, split)
         cols = np.linalg.norm(m0, axis=0)
         noise = code_in.scale / math.sqrt(12) * cols.reshape(axes.n_out, -1).max(axis=1)
         peak = float(np.abs(m0).max(initial=0.0))
@@ -278,7 +288,7 @@ def lower_time_linear(ctx: LoweringContext, node: str, op: Op, inputs: list[Valu
         if neurons:
             top = float(g.max())
             full, samples = full / top, tuple(x / top for x in samples)
-    m = real_weights(w, code_in.split, split)
+    m = _real_weights(ctx, w, code_in.split, split)
     bits = None
     if scaled and ctx.settings_of(TimeDftOptions).weight_bits is None:
         bits = exact_weight_bits(time_steps(ctx), n_rows)
