@@ -217,17 +217,20 @@ class Calibrate(Pass):
                                      copy.deepcopy(program.records.calibration)))
         return program
 
-    def _memo_key(self, ctx: CompileContext, program: CompiledProgram) -> tuple:
+    def _memo_key(self, ctx: CompileContext, program: CompiledProgram, *,
+                  kept: bool = True) -> tuple:
         """What a measured calibration depends on besides the frames (the same list's): the
-        chain, this pass's fields and the target (compared by value)."""
-        return (copy.deepcopy(program.graph), self.policy, float(self.headroom), ctx.target,
+        chain, this pass's fields and the target (compared by value); the chain copied for
+        a key that is ``kept``, the program's own for a lookup."""
+        graph = copy.deepcopy(program.graph) if kept else program.graph
+        return (graph, self.policy, float(self.headroom), ctx.target,
                 self.max_memory_bytes, tuple(sorted(ctx.calibration_inputs)))
 
     def _reused(self, ctx: CompileContext, program: CompiledProgram) -> Calibration | None:
         """A copy of a calibration measured with the same key, if ``ctx`` keeps any."""
         if not ctx.calibrations or not ctx.calibration_inputs:
             return None
-        key = self._memo_key(ctx, program)
+        key = self._memo_key(ctx, program, kept=False)
         for held, calibration in ctx.calibrations:
             if held[1:] == key[1:] and held[0] == key[0]:
                 return copy.deepcopy(calibration)
