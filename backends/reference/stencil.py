@@ -28,6 +28,7 @@ from math import prod
 
 import numpy as np
 
+from backends.reference.stencil_synapses import inside_counts
 from compiler.snn.network import Population
 from compiler.snn.projections import StencilProjection
 
@@ -158,38 +159,12 @@ class StencilDelivery:
                                                          strict=True))
 
     def _count_synapses(self, k: int) -> np.ndarray:
-        """Per source neuron, the taps of delay class ``k`` landing inside the map.
-
-        A tap lands inside when it does on every clipped axis, so over one or two clipped
-        axes the count is a sum or a product of per-axis validity tables (``coordinate ×
-        tap``, exact in float64: counts stay far below 2^53), broadcast over the other
-        axes; over more, :meth:`_count_synapses_by_events` counts event by event.
-        """
-        offsets = self.offsets[k]
-        clipped = [j for j in range(len(self.map_axes)) if not self.wrap[j]]
-        if len(clipped) > 2:
-            return self._count_synapses_by_events(k)
-        shape = [1] * len(self.src_dims)
-        tables, axes = [], []
-        for j in clipped:
-            axis = self.map_axes[j]
-            src_axis = self.src_axis_of[axis]
-            c = np.arange(self.src_dims[src_axis])[:, None] - offsets[None, :, j]
-            tables.append((c >= 0) & (c < self.tgt_dims[axis]))
-            axes.append(src_axis)
-        if not tables:
-            per = np.full((), offsets.shape[0], np.int64)
-        elif len(tables) == 1:
-            per = tables[0].sum(axis=1, dtype=np.int64)
-        else:
-            per = np.rint(tables[0].astype(np.float64) @ tables[1].T.astype(np.float64))
-            per = per.astype(np.int64)
-            if axes[0] > axes[1]:
-                per, axes = per.T, axes[::-1]
-        for a in axes:
-            shape[a] = self.src_dims[a]
-        counts = np.broadcast_to(per.reshape(shape), self.src_dims)
-        return np.ascontiguousarray(counts, dtype=np.int64).reshape(-1)
+        """Per source neuron, the taps of delay class ``k`` landing inside the map
+        (:func:`~backends.reference.stencil_synapses.inside_counts`; over more than two
+        clipped axes, :meth:`_count_synapses_by_events`)."""
+        counts = inside_counts(self.offsets[k], self.map_axes, self.wrap, self.src_axis_of,
+                               self.src_dims, self.tgt_dims)
+        return self._count_synapses_by_events(k) if counts is None else counts
 
     def _count_synapses_by_events(self, k: int) -> np.ndarray:
         """:meth:`_count_synapses` by enumerating every source neuron's taps (any axes)."""
