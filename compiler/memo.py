@@ -133,7 +133,8 @@ class CompileMemo:
     ----------
     hits : dict of str to int
         How often each kind of work was reused (``rint_feedback``, ``network``, ``split``,
-        ``traffic``).
+        ``traffic``, and each kind given to :meth:`kept` or :meth:`of_arrays`, such as
+        ``real_weights``).
     """
 
     hits: dict[str, int] = field(default_factory=lambda: {"rint_feedback": 0, "network": 0,

@@ -118,7 +118,7 @@ def coarsen(node: str, inputs: list[LayerInput], stacked: np.ndarray, code_in: T
     the *excess* (the largest value the neuron must hold over what the target holds,
     ``<= 1`` fits) and its own result for a membrane unit; the top level is divided by
     the excess (1 % margin) and the levels recomputed, at most 8 times or down to one
-    level.  ``memo``: :func:`round_levels`'.
+    level.  ``memo`` goes to :func:`round_levels`.
     """
     parts = max(1, N_PARTS[code_in.split])
     peak = float(np.abs(stacked).max(initial=0.0)) or 1.0
