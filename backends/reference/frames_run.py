@@ -5,7 +5,9 @@ runs exactly as it would alone (so the result equals the frames run one by one, 
 bit, whatever the number of workers), and its values are copied straight into one
 ``(F, *shape)`` array per node, allocated when the first frame is done: no per-frame
 result is kept until the end and then stacked, so the frames' temporaries are freed and
-reused frame after frame instead of paged in anew.
+reused frame after frame instead of paged in anew.  The stacked arrays have a memory
+mapping of their own (:func:`~backends.reference.frames_fork.private_empty`), outside
+``malloc``'s heap, so they do not change how it recycles the frames' temporaries.
 
 With ``workers > 1`` the frames are shared out to that many threads (each takes the
 next frame not yet started).  numpy and BLAS release the interpreter lock in their
@@ -35,7 +37,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from backends.reference.frames_fork import shared_empty
+from backends.reference.frames_fork import private_empty, shared_empty
 from backends.reference.result import SimResult
 from ir.errors import SimulationError
 
@@ -88,7 +90,7 @@ class FrameStack:
         """
         with self._lock:
             if self._arrays is None:
-                empty = shared_empty if self.shared else np.empty
+                empty = shared_empty if self.shared else private_empty
                 self._arrays = {k: empty((self.count, *np.shape(v)), np.asarray(v).dtype)
                                 for k, v in values.items()}
                 self._keys = list(values)
