@@ -47,3 +47,73 @@ def test_frame_stack_rows_take_each_frame():
     stack.put(0, {"f": np.array([[0, 5]], np.int16)}, where="t")
     out = stack.arrays()["f"]
     assert out.dtype == np.int16 and out.tolist() == [[[0, 5]], [[3, -1]]]
+
+
+def _charge_all_at_once(v, first, seg, params):
+    """The charging span as it was before the blocks: every candidate at once (oracle)."""
+    n, b0 = seg.stop - seg.start, seg.bias
+    b_all = params.per_neuron(b0, v.size)
+    end = v + n * b_all
+    if seg.spiking_on:
+        v_th_all = params.per_neuron(params.v_th, v.size)
+        top = end if b0 > 0 else np.maximum(v + b_all, end)
+        idle = np.flatnonzero(top >= v_th_all)
+        idle = idle[first[idle] < 0]
+        w = v[idle]
+        b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
+        if b0 > 0:
+            k = v_th - w
+            if params.integer:
+                k = -((-k) // b)
+            else:
+                k /= b
+                np.ceil(k, out=k)
+            np.clip(k, 1, n + 1, out=k)
+            probe = k - 1
+            probe *= b
+            probe += w
+            k -= (k > 1) & (probe >= v_th)
+            np.multiply(k, b, out=probe)
+            probe += w
+            k += probe < v_th
+        else:
+            k = np.where(w + b >= v_th, 1, n + 1)
+        step = k.astype(np.int64)
+        step += seg.start - 1
+        step[step >= seg.stop] = -1
+        first[idle] = step
+    return end
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), size=st.integers(1, 700), block=st.integers(1, 300),
+       integer=st.booleans(), scaled=st.booleans(), bias=st.integers(-3, 9),
+       v_th=st.integers(1, 400), start=st.integers(0, 20), length=st.integers(1, 60))
+def test_charge_in_blocks_gives_the_bits_of_all_at_once(seed, size, block, integer, scaled,
+                                                        bias, v_th, start, length):
+    import backends.reference.spans as spans
+    from backends.reference.neuron import PhaseSpan, StepParams
+    from compiler.snn import NeuronParams, Phase
+
+    rng = np.random.default_rng(seed)
+    n_steps = start + length
+    reps = 2 if scaled else 1
+    params = StepParams.from_params(
+        NeuronParams(du=1.0, dv=0.0, v_th=float(v_th), reset="fire_once",
+                     phases=(Phase(start_step=0, bias=float(bias), input_on=False),),
+                     **({"scale_axis": "r", "scales": (1.0, 3.0)} if scaled else {})),
+        n_steps, integer=integer, shape={"r": 2} if scaled else None)
+    size = size + size % reps
+    seg = PhaseSpan(start, n_steps, int(bias) if integer else float(bias), False, True)
+    v = (rng.integers(-50, 500, size) if integer else rng.normal(100.0, 150.0, size))
+    first = np.where(rng.random(size) < 0.3, rng.integers(0, max(1, start), size), -1)
+    want_first = first.copy()
+    want_end = _charge_all_at_once(v.copy(), want_first, seg, params)
+    saved = spans.CHARGE_BLOCK
+    try:
+        spans.CHARGE_BLOCK = block
+        u, end = spans.charge(v.copy(), first, seg, params)
+    finally:
+        spans.CHARGE_BLOCK = saved
+    assert end.dtype == want_end.dtype and end.tobytes() == want_end.tobytes()
+    assert first.tolist() == want_first.tolist() and not u.any()

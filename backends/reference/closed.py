@@ -106,7 +106,7 @@ def run_closed(
         fired, n = spikes[pid], n_frames * pop.size
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
-            counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
+            counts[pid] = fired.fired_mask.reshape(n_frames, -1)  # 0/1: no int64 copy
         elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
             counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
             first[pid] = fired.first_steps()

@@ -31,7 +31,6 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import replace
 from typing import TypeVar
 
@@ -187,11 +186,15 @@ class SimStack:
 
 def map_frames(run: Callable[[int], T], count: int, workers: int,
                progress: Callable[[int, int], None] | None = None) -> None:
-    """Call ``run(i)`` for every frame ``i < count`` on ``workers`` threads.
+    """Call ``run(i)`` for every frame ``i < count`` on ``workers`` threads: the calling
+    thread and ``workers − 1`` helpers, each taking the next frame not yet started.
 
-    ``progress(done, count)`` is called on the calling thread after each frame.  When a
-    frame raises, the frames not yet started are cancelled, and the exception of the
-    earliest failing frame among those that ran is raised here.
+    The calling thread works too, rather than waiting for a pool: its ``malloc`` arena
+    (the main heap, for the main thread) recycles a frame's temporaries as a run of single
+    frames does, so only the helpers' arenas page them in.  ``progress(done, count)`` is
+    called on the calling thread, between its frames and at the end.  When a frame raises,
+    no frame starts after it, and the exception of the earliest failing frame among those
+    that ran is raised here.
     """
     if workers <= 1:
         for i in range(count):
@@ -199,18 +202,53 @@ def map_frames(run: Callable[[int], T], count: int, workers: int,
             if progress is not None:
                 progress(i + 1, count)
         return
-    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="radarsnn-frame") as pool:
-        futures = [pool.submit(run, i) for i in range(count)]
-        try:
-            for done, future in enumerate(as_completed(futures), start=1):
-                if future.exception() is not None:
-                    break
-                if progress is not None:
-                    progress(done, count)
-        finally:
-            for future in futures:
-                future.cancel()
-    # the error of the earliest failing frame, as one thread would have raised it
-    failed = [f.exception() for f in futures if not f.cancelled() and f.exception()]
-    if failed:
-        raise failed[0]
+    lock = threading.Lock()
+    todo = iter(range(count))
+    done: list[int] = []  # frames finished, reported by the calling thread
+    failed: dict[int, BaseException] = {}
+
+    def take() -> int | None:
+        with lock:
+            return None if failed else next(todo, None)
+
+    def work() -> None:
+        while (i := take()) is not None:
+            try:
+                run(i)
+            except BaseException as err:  # noqa: BLE001 - raised on the calling thread
+                with lock:
+                    failed[i] = err
+                return
+            with lock:
+                done.append(i)
+
+    def report(upto: int) -> int:
+        with lock:
+            now = len(done)
+        if progress is not None:
+            for n in range(upto + 1, now + 1):
+                progress(n, count)
+        return now
+
+    helpers = [threading.Thread(target=work, name=f"radarsnn-frame-{k}", daemon=True)
+               for k in range(1, workers)]
+    for t in helpers:
+        t.start()
+    reported = 0
+    try:
+        while (i := take()) is not None:
+            try:
+                run(i)
+            except BaseException as err:  # noqa: BLE001 - the earliest is raised below
+                with lock:
+                    failed[i] = err
+                break
+            with lock:
+                done.append(i)
+            reported = report(reported)
+    finally:
+        for t in helpers:
+            t.join()
+    report(reported)
+    if failed:  # the error of the earliest failing frame, as one thread would have raised it
+        raise failed[min(failed)]

@@ -52,7 +52,9 @@ class Activity:
     first_spike : dict
         Per population, ``(n_frames, size)`` int64 first spike step, ``-1`` = never.
     counts : dict
-        Per population, ``(n_frames, size)`` int64 spikes per neuron in the frame.
+        Per population, ``(n_frames, size)`` spikes per neuron in the frame: int64, or bool
+        where a neuron spikes at most once (the closed form's fire-once and latency
+        populations: its fired mask, not copied to int64).
     membrane : dict
         Per neuron population, ``(n_frames, size)`` membrane ``v`` after the last step.
     synaptic_events : dict

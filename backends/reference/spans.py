@@ -85,6 +85,11 @@ class Arrivals:
         return current(self.delivery, self.k, feature, n_frames)
 
 
+#: Neurons per block of :func:`charge`'s first-crossing arithmetic: its temporaries stay
+#: at a few hundred kB (recycled by ``malloc``), not one array per neuron of the batch each.
+CHARGE_BLOCK = 1 << 17
+
+
 def charge(
     v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -92,7 +97,8 @@ def charge(
 
     Only neurons that have not fired and end the span at or above threshold
     can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
-    step arithmetic runs on those candidates alone.
+    step arithmetic runs on those candidates alone, block by block of
+    :data:`CHARGE_BLOCK` neurons (elementwise: the same bits as all at once).
     """
     n, b0 = seg.stop - seg.start, seg.bias
     if b0 == 0 and not seg.spiking_on:
@@ -101,34 +107,45 @@ def charge(
     end = v + n * b_all
     if seg.spiking_on:
         v_th_all = params.per_neuron(params.v_th, v.size)
-        top = end if b0 > 0 else np.maximum(v + b_all, end)
-        idle = np.flatnonzero(top >= v_th_all)
-        idle = idle[first[idle] < 0]
-        w = v[idle]
-        b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
-        if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
-            k = v_th - w
-            if params.integer:
-                k = -((-k) // b)
-            else:
-                k /= b
-                np.ceil(k, out=k)
-            np.clip(k, 1, n + 1, out=k)
-            # the rounding checks: the first k with w + k b >= v_th, as the steps add it
-            probe = k - 1
-            probe *= b
-            probe += w
-            k -= (k > 1) & (probe >= v_th)
-            np.multiply(k, b, out=probe)
-            probe += w
-            k += probe < v_th
-        else:
-            k = np.where(w + b >= v_th, 1, n + 1)
-        step = k.astype(np.int64)  # idle neurons have first = −1: write every one
-        step += seg.start - 1
-        step[step >= seg.stop] = -1
-        first[idle] = step
+        for lo in range(0, v.size, CHARGE_BLOCK):
+            _cross(v, end, first, slice(lo, min(lo + CHARGE_BLOCK, v.size)), seg, params,
+                   b_all, v_th_all)
     return _zeros(v), end
+
+
+def _cross(v: np.ndarray, end: np.ndarray, first: np.ndarray, block: slice, seg: PhaseSpan,
+           params: StepParams, b_all, v_th_all) -> None:
+    """:func:`charge`'s first crossings of the neurons ``block`` (written into ``first``)."""
+    n, b0 = seg.stop - seg.start, seg.bias
+    v_th_b = v_th_all[block] if np.ndim(v_th_all) else v_th_all
+    b_b = b_all[block] if np.ndim(b_all) else b_all
+    top = end[block] if b0 > 0 else np.maximum(v[block] + b_b, end[block])
+    idle = np.flatnonzero(top >= v_th_b)
+    idle = idle[first[block][idle] < 0]
+    w = v[block][idle]
+    b, v_th = (b0, params.v_th) if params.scale is None else (b_b[idle], v_th_b[idle])
+    if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
+        k = v_th - w
+        if params.integer:
+            k = -((-k) // b)
+        else:
+            k /= b
+            np.ceil(k, out=k)
+        np.clip(k, 1, n + 1, out=k)
+        # the rounding checks: the first k with w + k b >= v_th, as the steps add it
+        probe = k - 1
+        probe *= b
+        probe += w
+        k -= (k > 1) & (probe >= v_th)
+        np.multiply(k, b, out=probe)
+        probe += w
+        k += probe < v_th
+    else:
+        k = np.where(w + b >= v_th, 1, n + 1)
+    step = k.astype(np.int64)  # idle neurons have first = −1: write every one
+    step += seg.start - 1
+    step[step >= seg.stop] = -1
+    first[block][idle] = step
 
 
 def _zeros(v: np.ndarray) -> np.ndarray:
@@ -148,8 +165,9 @@ def silent(
     """
     s0, s1 = seg.start, seg.stop
     b = params.per_neuron(seg.bias, u.size) if seg.bias != 0 else seg.bias
-    total = np.zeros((n_frames, *dims), u.dtype)
-    second = np.zeros(total.shape, total.dtype)
+    keep_total = need_u or params.du != 0.0  # else nothing adds to it: zeros, not written
+    total = np.zeros((n_frames, *dims), u.dtype) if keep_total else None
+    second = np.zeros((n_frames, *dims), u.dtype)
     for arr in arrivals:
         if (params.du == 0.0 and not need_u
                 and (cur := arr.dense_current(s0, s1, n_frames, weighted=True)) is not None):
@@ -160,7 +178,7 @@ def silent(
             continue
         # unit weights route the silent stage's bulk delivery through the BLAS path (event
         # order is immaterial here: the silent path is exact only where every sum is exact)
-        if need_u or params.du != 0.0:
+        if keep_total:
             total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
         if params.du == 0.0:
             second += arr.delivery.current(arr.k, flat, n_frames, values=s1 - arrive)
@@ -168,7 +186,8 @@ def silent(
             last = arrive == s1 - 1
             if last.any():
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
-    total, second = total.reshape(u.shape), second.reshape(u.shape)
+    total = total.reshape(u.shape) if keep_total else _zeros(u)
+    second = second.reshape(u.shape)
     if params.du == 0.0 and s0 == 0:  # the first span: u = v = 0, skip the zero terms
         return total, second if seg.bias == 0 else second + s1 * b
     if params.du == 0.0:
