@@ -88,9 +88,11 @@ def _charge_all_at_once(v, first, seg, params):
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), size=st.integers(1, 700), block=st.integers(1, 300),
        integer=st.booleans(), scaled=st.booleans(), bias=st.integers(-3, 9),
-       v_th=st.integers(1, 400), start=st.integers(0, 20), length=st.integers(1, 60))
+       v_th=st.integers(1, 400), start=st.integers(0, 20), length=st.integers(1, 60),
+       in_place=st.booleans(), spiking=st.booleans())
 def test_charge_in_blocks_gives_the_bits_of_all_at_once(seed, size, block, integer, scaled,
-                                                        bias, v_th, start, length):
+                                                        bias, v_th, start, length, in_place,
+                                                        spiking):
     import backends.reference.spans as spans
     from backends.reference.neuron import PhaseSpan, StepParams
     from compiler.snn import NeuronParams, Phase
@@ -104,16 +106,20 @@ def test_charge_in_blocks_gives_the_bits_of_all_at_once(seed, size, block, integ
                      **({"scale_axis": "r", "scales": (1.0, 3.0)} if scaled else {})),
         n_steps, integer=integer, shape={"r": 2} if scaled else None)
     size = size + size % reps
-    seg = PhaseSpan(start, n_steps, int(bias) if integer else float(bias), False, True)
+    seg = PhaseSpan(start, n_steps, int(bias) if integer else float(bias), False, spiking)
     v = (rng.integers(-50, 500, size) if integer else rng.normal(100.0, 150.0, size))
     first = np.where(rng.random(size) < 0.3, rng.integers(0, max(1, start), size), -1)
     want_first = first.copy()
-    want_end = _charge_all_at_once(v.copy(), want_first, seg, params)
-    saved = spans.CHARGE_BLOCK
+    want_end = (_charge_all_at_once(v.copy(), want_first, seg, params)
+                if bias != 0 or spiking else v)
+    saved, given = spans.CHARGE_BLOCK, v.copy()
     try:
         spans.CHARGE_BLOCK = block
-        u, end = spans.charge(v.copy(), first, seg, params)
+        u, end = spans.charge(given, first, seg, params, in_place=in_place)
     finally:
         spans.CHARGE_BLOCK = saved
     assert end.dtype == want_end.dtype and end.tobytes() == want_end.tobytes()
+    assert (end is given) == (in_place or (bias == 0 and not spiking))
+    if not in_place:  # the caller's start values are kept
+        assert given.tobytes() == v.tobytes()
     assert first.tolist() == want_first.tolist() and not u.any()

@@ -185,7 +185,7 @@ def _solve_neurons(plan: SimPlan, pid: str, params, arrivals: list, spikes: dict
     block = max(1, block_bytes // (3 * 8 * n))
     for i, seg in enumerate(params.spans):
         if not seg.input_on and params.dv == 0.0:
-            u, v = charge(v, first, seg, params)
+            u, v = charge(v, first, seg, params, in_place=True)  # v: this solver's own
         elif seg.input_on and not seg.spiking_on and simple:
             # the end current u matters only if a later span takes input (else it is reset)
             need_u = any(s.input_on for s in params.spans[i + 1:])

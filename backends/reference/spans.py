@@ -91,39 +91,51 @@ CHARGE_BLOCK = 1 << 17
 
 
 def charge(
-    v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams
+    v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams, *,
+    in_place: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
     """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic.
 
     Only neurons that have not fired and end the span at or above threshold
     can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
     step arithmetic runs on those candidates alone, block by block of
-    :data:`CHARGE_BLOCK` neurons (elementwise: the same bits as all at once).
+    :data:`CHARGE_BLOCK` neurons (elementwise: the same bits as all at once).  With
+    ``in_place`` (the caller owns ``v`` and needs its start values no more) the end
+    membranes ``v + n b`` are written into ``v`` block by block, where their type is
+    ``v``'s: no array as large as the population is allocated.
     """
     n, b0 = seg.stop - seg.start, seg.bias
     if b0 == 0 and not seg.spiking_on:
         return _zeros(v), v
     b_all = params.per_neuron(b0, v.size)  # per-neuron scales: c·b and c·v_th per neuron
-    end = v + n * b_all
-    if seg.spiking_on:
-        v_th_all = params.per_neuron(params.v_th, v.size)
-        for lo in range(0, v.size, CHARGE_BLOCK):
-            _cross(v, end, first, slice(lo, min(lo + CHARGE_BLOCK, v.size)), seg, params,
-                   b_all, v_th_all)
+    n_b = n * b_all
+    if not v.size:
+        return _zeros(v), v + n_b
+    v_th_all = params.per_neuron(params.v_th, v.size) if seg.spiking_on else None
+    end = None
+    for lo in range(0, v.size, CHARGE_BLOCK):
+        block = slice(lo, min(lo + CHARGE_BLOCK, v.size))
+        end_b = v[block] + (n_b[block] if np.ndim(n_b) else n_b)  # v + n b, per neuron
+        if seg.spiking_on:  # reads v's start values of the block before they are replaced
+            _cross(v[block], end_b, first[block], seg, params,
+                   b_all[block] if np.ndim(b_all) else b_all,
+                   v_th_all[block] if np.ndim(v_th_all) else v_th_all)
+        if end is None:
+            end = v if in_place and end_b.dtype == v.dtype else np.empty(v.shape, end_b.dtype)
+        end[block] = end_b
     return _zeros(v), end
 
 
-def _cross(v: np.ndarray, end: np.ndarray, first: np.ndarray, block: slice, seg: PhaseSpan,
+def _cross(v: np.ndarray, end: np.ndarray, first: np.ndarray, seg: PhaseSpan,
            params: StepParams, b_all, v_th_all) -> None:
-    """:func:`charge`'s first crossings of the neurons ``block`` (written into ``first``)."""
+    """:func:`charge`'s first crossings of one block of neurons (``v``, ``end``, ``first``
+    and any per-neuron ``b_all``, ``v_th_all`` of that block; ``first`` written)."""
     n, b0 = seg.stop - seg.start, seg.bias
-    v_th_b = v_th_all[block] if np.ndim(v_th_all) else v_th_all
-    b_b = b_all[block] if np.ndim(b_all) else b_all
-    top = end[block] if b0 > 0 else np.maximum(v[block] + b_b, end[block])
-    idle = np.flatnonzero(top >= v_th_b)
-    idle = idle[first[block][idle] < 0]
-    w = v[block][idle]
-    b, v_th = (b0, params.v_th) if params.scale is None else (b_b[idle], v_th_b[idle])
+    top = end if b0 > 0 else np.maximum(v + b_all, end)
+    idle = np.flatnonzero(top >= v_th_all)
+    idle = idle[first[idle] < 0]
+    w = v[idle]
+    b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
     if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
         k = v_th - w
         if params.integer:
@@ -145,7 +157,7 @@ def _cross(v: np.ndarray, end: np.ndarray, first: np.ndarray, block: slice, seg:
     step = k.astype(np.int64)  # idle neurons have first = −1: write every one
     step += seg.start - 1
     step[step >= seg.stop] = -1
-    first[block][idle] = step
+    first[idle] = step
 
 
 def _zeros(v: np.ndarray) -> np.ndarray:
