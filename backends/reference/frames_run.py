@@ -36,11 +36,13 @@ from typing import TypeVar
 
 import numpy as np
 
-from backends.reference.frames_fork import private_empty, shared_empty
+from backends.reference.frames_fork import fork_available, private_empty, shared_empty
 from backends.reference.result import SimResult
+from backends.reference.run_options import RunOptions
 from ir.errors import SimulationError
 
-__all__ = ["FrameStack", "SimStack", "available_cores", "map_frames", "resolve_workers"]
+__all__ = ["FrameStack", "SimStack", "available_cores", "default_parallel", "map_frames",
+           "resolve_workers"]
 
 T = TypeVar("T")
 
@@ -58,6 +60,20 @@ def resolve_workers(workers: int | None, count: int) -> int:
     never more than the frames."""
     want = available_cores() if workers is None else int(workers)
     return max(1, min(want, count))
+
+
+def default_parallel() -> str:
+    """What the workers of a frames axis are when the caller does not say: the default
+    :attr:`~backends.reference.run_options.RunOptions.parallel`, or ``"threads"`` where the
+    system cannot fork (what ``radarsnn bench`` reports as ``parallel``).
+
+    Examples
+    --------
+    >>> default_parallel() in ("threads", "processes")
+    True
+    """
+    kind = RunOptions().parallel
+    return kind if kind == "threads" or fork_available() else "threads"
 
 
 class FrameStack:
