@@ -123,3 +123,39 @@ def test_charge_in_blocks_gives_the_bits_of_all_at_once(seed, size, block, integ
     if not in_place:  # the caller's start values are kept
         assert given.tobytes() == v.tobytes()
     assert first.tolist() == want_first.tolist() and not u.any()
+
+
+@settings(max_examples=40, deadline=None)
+@given(count=st.integers(0, 12), workers=st.integers(1, 4),
+       failing=st.sets(st.integers(0, 11), max_size=3))
+def test_map_frames_runs_each_frame_once_and_raises_the_earliest_failure(count, workers,
+                                                                         failing):
+    import threading
+
+    from backends.reference.frames_run import map_frames
+
+    ran, seen, caller = [], [], threading.get_ident()
+    lock = threading.Lock()
+
+    def run(i):
+        with lock:
+            ran.append(i)
+        if i in failing:
+            raise ValueError(f"frame {i}")
+
+    def progress(done, total):
+        assert threading.get_ident() == caller  # always on the calling thread
+        seen.append((done, total))
+
+    bad = sorted(failing & set(range(count)))
+    try:
+        map_frames(run, count, workers, progress)
+    except ValueError as err:
+        assert bad and str(err) == f"frame {min(set(ran) & set(bad))}"
+        assert bad[0] in ran  # frames start in order: the first failure always ran
+    else:
+        assert not bad
+    assert len(ran) == len(set(ran))  # no frame twice
+    if not bad:
+        assert sorted(ran) == list(range(count))
+        assert seen == [(i + 1, count) for i in range(count)]
