@@ -159,3 +159,20 @@ def test_map_frames_runs_each_frame_once_and_raises_the_earliest_failure(count, 
     if not bad:
         assert sorted(ran) == list(range(count))
         assert seen == [(i + 1, count) for i in range(count)]
+
+
+@given(st.lists(st.lists(st.sampled_from([0.0, -0.0, 1.5, -2.0, 3e300, -3e300, 1e-310,
+                                          np.inf, -np.inf]) | st.floats(allow_nan=False),
+                         min_size=3, max_size=3), min_size=1, max_size=4))
+def test_a_silent_span_sums_its_currents_as_zeros_plus_each(currents):
+    from backends.reference.spans import _accumulate
+
+    arrays = [np.array(c, np.float64) for c in currents]
+    with np.errstate(all="ignore"):  # inf - inf: the same NaN either way
+        want = np.zeros(3)
+        for a in arrays:
+            want += a
+        got = None
+        for a in arrays:
+            got = _accumulate(got, a.copy(), (3,), np.float64)
+    assert got.tobytes() == want.tobytes()

@@ -179,12 +179,16 @@ def silent(
     b = params.per_neuron(seg.bias, u.size) if seg.bias != 0 else seg.bias
     keep_total = need_u or params.du != 0.0  # else nothing adds to it: zeros, not written
     total = np.zeros((n_frames, *dims), u.dtype) if keep_total else None
-    second = np.zeros((n_frames, *dims), u.dtype)
+    shape = (n_frames, *dims)
+    second = None  # zeros, allocated when a delivery adds events (or none came)
     for arr in arrivals:
         if (params.du == 0.0 and not need_u
                 and (cur := arr.dense_current(s0, s1, n_frames, weighted=True)) is not None):
-            second += cur  # the bulk of a silent stage: no events, no sort
+            # the bulk of a silent stage: no events, no sort
+            second = _accumulate(second, cur, shape, u.dtype)
             continue
+        if second is None:
+            second = np.zeros(shape, u.dtype)
         flat, arrive = arr.within(s0, s1)
         if not flat.size:
             continue
@@ -199,12 +203,36 @@ def silent(
             if last.any():
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
     total = total.reshape(u.shape) if keep_total else _zeros(u)
-    second = second.reshape(u.shape)
+    second = (np.zeros(shape, u.dtype) if second is None else second).reshape(u.shape)
     if params.du == 0.0 and s0 == 0:  # the first span: u = v = 0, skip the zero terms
         return total, second if seg.bias == 0 else second + s1 * b
     if params.du == 0.0:
         return u + total, v + (s1 - s0) * (u + b) + second
     return second, v + (s1 - s0) * b + total
+
+
+def _accumulate(total: np.ndarray | None, current: np.ndarray, shape: tuple[int, ...],
+                dtype) -> np.ndarray:
+    """``total += current`` with ``total`` zeros when None: the first current, a new array
+    of the dense-feature products (:data:`~backends.reference.delivery.FEATURE_CURRENTS`),
+    becomes the total in place as ``0 + current`` (``−0`` turns ``+0`` as the sum makes it),
+    instead of a population's zeros plus a copy.
+
+    Examples
+    --------
+    >>> _accumulate(None, np.array([-0.0, 2.0]), (2,), np.float64).tolist()
+    [0.0, 2.0]
+    >>> _accumulate(np.array([1.0, 1.0]), np.array([2.0, 3.0]), (2,), np.float64).tolist()
+    [3.0, 4.0]
+    """
+    if total is None:
+        if (current.shape == shape and current.dtype == dtype and current.flags.writeable
+                and current.flags.c_contiguous):
+            current += 0.0
+            return current
+        total = np.zeros(shape, dtype)
+    total += current
+    return total
 
 
 def driven(
