@@ -176,3 +176,28 @@ def test_a_silent_span_sums_its_currents_as_zeros_plus_each(currents):
         for a in arrays:
             got = _accumulate(got, a.copy(), (3,), np.float64)
     assert got.tobytes() == want.tobytes()
+
+
+def test_a_progress_callback_that_raises_stops_the_frames_not_started():
+    import threading
+    import time
+
+    import pytest
+
+    from backends.reference.frames_run import map_frames
+
+    ran, caller, gate = [], threading.current_thread(), threading.Event()
+
+    def run(i):
+        ran.append(i)
+        if threading.current_thread() is not caller:  # a helper: busy until progress raised
+            gate.wait()
+            time.sleep(0.01)
+
+    def progress(done, total):
+        gate.set()
+        raise KeyError("stop")
+
+    with pytest.raises(KeyError, match="stop"):
+        map_frames(run, 50, 2, progress)
+    assert len(ran) <= 3 and len(ran) == len(set(ran))  # the helper stopped taking frames

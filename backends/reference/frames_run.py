@@ -222,21 +222,26 @@ def map_frames(run: Callable[[int], T], count: int, workers: int,
     todo = iter(range(count))
     done: list[int] = []  # frames finished, reported by the calling thread
     failed: dict[int, BaseException] = {}
+    stopped = [False]  # the calling thread left its loop (a progress callback raised)
 
     def take() -> int | None:
         with lock:
-            return None if failed else next(todo, None)
+            return None if failed or stopped[0] else next(todo, None)
+
+    def one(i: int) -> bool:
+        try:
+            run(i)
+        except BaseException as err:  # noqa: BLE001 - the earliest is raised by the caller
+            with lock:
+                failed[i] = err
+            return False
+        with lock:
+            done.append(i)
+        return True
 
     def work() -> None:
-        while (i := take()) is not None:
-            try:
-                run(i)
-            except BaseException as err:  # noqa: BLE001 - raised on the calling thread
-                with lock:
-                    failed[i] = err
-                return
-            with lock:
-                done.append(i)
+        while (i := take()) is not None and one(i):
+            pass
 
     def report(upto: int) -> int:
         with lock:
@@ -252,17 +257,11 @@ def map_frames(run: Callable[[int], T], count: int, workers: int,
         t.start()
     reported = 0
     try:
-        while (i := take()) is not None:
-            try:
-                run(i)
-            except BaseException as err:  # noqa: BLE001 - the earliest is raised below
-                with lock:
-                    failed[i] = err
-                break
-            with lock:
-                done.append(i)
+        while (i := take()) is not None and one(i):
             reported = report(reported)
     finally:
+        with lock:
+            stopped[0] = True
         for t in helpers:
             t.join()
     report(reported)
