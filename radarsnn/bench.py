@@ -99,6 +99,9 @@ class BenchReport:
     #: Threads of the frames-axis figure (the available cores) and frames on its axis.
     workers: int = 0
     n_frames_axis: int = 0
+    #: What those workers were: the default of ``RunOptions.parallel`` as it ran here
+    #: (``"threads"``, or ``"processes"`` where the system can fork).
+    parallel: str = ""
     #: ``user_s`` / ``system_s``: CPU seconds of the frames-axis timings (getrusage).
     cpu: dict[str, float] = field(default_factory=dict)
     #: The chain timed (a preset's range-Doppler chain, or a chain file).

@@ -12,7 +12,8 @@ bench's program and frame, each pair of a ratio *in turn* (the bench's
   ``run_program_first_call``: the very first call, plans built (one run, not a median);
 * ``frames_axis_1_worker`` / ``frames_axis_n_workers``: seconds per frame of one call on
   ``n_frames`` frames stacked on a leading axis, with ``workers=1`` and with one thread
-  per available core (``workers``);
+  per available core (``workers``), of the kind ``run_program`` uses by default
+  (``parallel``: :func:`backends.reference.frames_run.default_parallel`);
 * the user and system CPU seconds of the frames-axis timings (``resource.getrusage``:
   system time is mostly page faults);
 * what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
@@ -64,7 +65,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     import time
 
     from backends.reference import program_plans, run_program
-    from backends.reference.frames_run import available_cores
+    from backends.reference.frames_run import available_cores, default_parallel
 
     inputs, stacked = {"adc": frame}, {"adc": frames}
     t0 = time.perf_counter()
@@ -78,6 +79,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
         repeats))
     workers = available_cores()
     report.workers, report.n_frames_axis = workers, len(frames)
+    report.parallel = default_parallel()
     user, system = _cpu()
     per_call = medians({
         "frames_axis_1_worker": lambda: run_program(program, stacked, out_of_range="clip",
@@ -156,7 +158,8 @@ def user_path_lines(report) -> list[str]:
     if not report.user_path:
         return []
     lines = [f"  user's path (run_program as called; frames axis of {report.n_frames_axis}, "
-             f"{report.workers} worker(s) = available cores)"]
+             f"{report.workers} worker(s) = available cores, "
+             f"{report.parallel or 'threads'} by default)"]
     for k, v in report.user_path.items():
         rate = ("" if k.startswith(("compile", "host")) else
                 f" {1.0 / v if v else float('inf'):>10.2f}")

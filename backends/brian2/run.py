@@ -23,7 +23,7 @@ from backends.brian2.build import Brian2Model, build_model
 from backends.reference.decoding import check_decoders, decode_outputs
 from backends.reference.encoding import encode_inputs
 from backends.reference.input_range import DEFAULT_POLICY
-from backends.reference.result import Activity, SimResult
+from backends.reference.result import Activity, SimResult, first_steps
 from compiler.snn.network import SpikingNetwork
 from ir.errors import SimulationError
 
@@ -156,7 +156,8 @@ def simulate_brian2(
         outputs=decode_outputs(network, act, framed),
         spike_counts={pid: int(c.sum()) for pid, c in act.counts.items()},
         synaptic_events=dict(act.synaptic_events),
-        first_spike_steps={pid: f.reshape(n_frames, *network.population[pid].dims)
+        first_spike_steps={pid: first_steps(f, network.n_steps,
+                                            (n_frames, *network.population[pid].dims))
                            for pid, f in act.first_spike.items()},
         spikes=None if act.rasters is None else {
             pid: r.reshape(n_frames, network.n_steps, *network.population[pid].dims)

@@ -106,7 +106,7 @@ def run_closed(
         fired, n = spikes[pid], n_frames * pop.size
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
-            counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
+            counts[pid] = fired.fired_mask.reshape(n_frames, -1)  # 0/1: no int64 copy
         elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
             counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
             first[pid] = fired.first_steps()
@@ -166,7 +166,10 @@ def _solve(
     pop = plan.populations[pid]
     n = n_frames * pop.size
     dtype = np.int64 if plan.integer else np.float64
-    u, v, first = np.zeros(n, dtype), np.zeros(n, dtype), np.full(n, -1, np.int64)
+    # the start state: read-only zeros (the span solvers make new arrays, or charge writes
+    # into a v of its own), not two population-sized arrays per frame
+    u = v = np.broadcast_to(np.zeros(1, dtype), (n,))
+    first = np.full(n, -1, np.int64)
     if isinstance(params, ResonatorStepParams):
         v = solve_resonators(plan, pid, arrivals, n_frames, first)
     else:
@@ -185,7 +188,8 @@ def _solve_neurons(plan: SimPlan, pid: str, params, arrivals: list, spikes: dict
     block = max(1, block_bytes // (3 * 8 * n))
     for i, seg in enumerate(params.spans):
         if not seg.input_on and params.dv == 0.0:
-            u, v = charge(v, first, seg, params)
+            # v is this solver's own once a span has made it (not the zeros it starts from)
+            u, v = charge(v, first, seg, params, in_place=v.flags.writeable)
         elif seg.input_on and not seg.spiking_on and simple:
             # the end current u matters only if a later span takes input (else it is reset)
             need_u = any(s.input_on for s in params.spans[i + 1:])

@@ -53,7 +53,8 @@ IN_PLACE_ADDERS: dict[type, Callable[..., None]] = {MatrixDelivery: MatrixDelive
 
 #: Dense-feature currents by delivery type: ``(applies(delivery, k, n_events, n_batch),
 #: current(delivery, k, feature, n_batch))`` (:meth:`MatrixDelivery.feature_current`); a
-#: type missing here always delivers events.
+#: type missing here always delivers events.  ``current`` returns a new array, which the
+#: caller may keep and write (the silent span sums into the first one).
 FEATURE_CURRENTS: dict[type, tuple[Callable[..., bool], Callable[..., np.ndarray]]] = {
     MatrixDelivery: (MatrixDelivery.dense_for, MatrixDelivery.feature_current),
 }

@@ -42,7 +42,7 @@ from multiprocessing.connection import wait
 
 import numpy as np
 
-__all__ = ["fork_available", "map_frames_forked", "shared_empty"]
+__all__ = ["fork_available", "map_frames_forked", "private_empty", "shared_empty"]
 
 
 def fork_available() -> bool:
@@ -55,6 +55,31 @@ def shared_empty(shape: tuple[int, ...], dtype) -> np.ndarray:
     dtype = np.dtype(dtype)
     count = prod(shape)
     buffer = mmap.mmap(-1, max(1, count * dtype.itemsize))
+    return np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
+
+
+def private_empty(shape: tuple[int, ...], dtype) -> np.ndarray:
+    """An uninitialised array in its own anonymous private mapping (huge pages asked for).
+
+    The stacked results of a frames axis (:class:`~backends.reference.frames_run.FrameStack`)
+    are new memory, paged in once whatever allocates them; from ``malloc`` they would also
+    move its adaptive thresholds, after which the frames' own temporaries were given back
+    to the system and paged in anew frame after frame.  A mapping of their own leaves the
+    heap as a run of single frames leaves it, and is unmapped when the array is freed.
+
+    Examples
+    --------
+    >>> a = private_empty((2, 3), np.int16)
+    >>> a[:] = 7
+    >>> int(a.sum()), a.dtype
+    (42, dtype('int16'))
+    """
+    dtype = np.dtype(dtype)
+    count = prod(shape)
+    buffer = mmap.mmap(-1, max(1, count * dtype.itemsize),
+                       flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+    if hasattr(mmap, "MADV_HUGEPAGE") and count * dtype.itemsize >= 4 << 20:
+        buffer.madvise(mmap.MADV_HUGEPAGE)  # as numpy asks for its own large arrays
     return np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
 
 

@@ -5,7 +5,9 @@ runs exactly as it would alone (so the result equals the frames run one by one, 
 bit, whatever the number of workers), and its values are copied straight into one
 ``(F, *shape)`` array per node, allocated when the first frame is done: no per-frame
 result is kept until the end and then stacked, so the frames' temporaries are freed and
-reused frame after frame instead of paged in anew.
+reused frame after frame instead of paged in anew.  The stacked arrays have a memory
+mapping of their own (:func:`~backends.reference.frames_fork.private_empty`), outside
+``malloc``'s heap, so they do not change how it recycles the frames' temporaries.
 
 With ``workers > 1`` the frames are shared out to that many threads (each takes the
 next frame not yet started).  numpy and BLAS release the interpreter lock in their
@@ -29,17 +31,18 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import replace
 from typing import TypeVar
 
 import numpy as np
 
-from backends.reference.frames_fork import shared_empty
+from backends.reference.frames_fork import fork_available, private_empty, shared_empty
 from backends.reference.result import SimResult
+from backends.reference.run_options import RunOptions
 from ir.errors import SimulationError
 
-__all__ = ["FrameStack", "SimStack", "available_cores", "map_frames", "resolve_workers"]
+__all__ = ["FrameStack", "SimStack", "available_cores", "default_parallel", "map_frames",
+           "resolve_workers"]
 
 T = TypeVar("T")
 
@@ -57,6 +60,20 @@ def resolve_workers(workers: int | None, count: int) -> int:
     never more than the frames."""
     want = available_cores() if workers is None else int(workers)
     return max(1, min(want, count))
+
+
+def default_parallel() -> str:
+    """What the workers of a frames axis are when the caller does not say: the default
+    :attr:`~backends.reference.run_options.RunOptions.parallel`, or ``"threads"`` where the
+    system cannot fork (what ``radarsnn bench`` reports as ``parallel``).
+
+    Examples
+    --------
+    >>> default_parallel() in ("threads", "processes")
+    True
+    """
+    kind = RunOptions().parallel
+    return kind if kind == "threads" or fork_available() else "threads"
 
 
 class FrameStack:
@@ -88,7 +105,7 @@ class FrameStack:
         """
         with self._lock:
             if self._arrays is None:
-                empty = shared_empty if self.shared else np.empty
+                empty = shared_empty if self.shared else private_empty
                 self._arrays = {k: empty((self.count, *np.shape(v)), np.asarray(v).dtype)
                                 for k, v in values.items()}
                 self._keys = list(values)
@@ -185,11 +202,15 @@ class SimStack:
 
 def map_frames(run: Callable[[int], T], count: int, workers: int,
                progress: Callable[[int, int], None] | None = None) -> None:
-    """Call ``run(i)`` for every frame ``i < count`` on ``workers`` threads.
+    """Call ``run(i)`` for every frame ``i < count`` on ``workers`` threads: the calling
+    thread and ``workers − 1`` helpers, each taking the next frame not yet started.
 
-    ``progress(done, count)`` is called on the calling thread after each frame.  When a
-    frame raises, the frames not yet started are cancelled, and the exception of the
-    earliest failing frame among those that ran is raised here.
+    The calling thread works too, rather than waiting for a pool: its ``malloc`` arena
+    (the main heap, for the main thread) recycles a frame's temporaries as a run of single
+    frames does, so only the helpers' arenas page them in.  ``progress(done, count)`` is
+    called on the calling thread, between its frames and at the end.  When a frame raises,
+    no frame starts after it, and the exception of the earliest failing frame among those
+    that ran is raised here.
     """
     if workers <= 1:
         for i in range(count):
@@ -197,18 +218,52 @@ def map_frames(run: Callable[[int], T], count: int, workers: int,
             if progress is not None:
                 progress(i + 1, count)
         return
-    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="radarsnn-frame") as pool:
-        futures = [pool.submit(run, i) for i in range(count)]
+    lock = threading.Lock()
+    todo = iter(range(count))
+    done: list[int] = []  # frames finished, reported by the calling thread
+    failed: dict[int, BaseException] = {}
+    stopped = [False]  # the calling thread left its loop (a progress callback raised)
+
+    def take() -> int | None:
+        with lock:
+            return None if failed or stopped[0] else next(todo, None)
+
+    def one(i: int) -> bool:
         try:
-            for done, future in enumerate(as_completed(futures), start=1):
-                if future.exception() is not None:
-                    break
-                if progress is not None:
-                    progress(done, count)
-        finally:
-            for future in futures:
-                future.cancel()
-    # the error of the earliest failing frame, as one thread would have raised it
-    failed = [f.exception() for f in futures if not f.cancelled() and f.exception()]
-    if failed:
-        raise failed[0]
+            run(i)
+        except BaseException as err:  # noqa: BLE001 - the earliest is raised by the caller
+            with lock:
+                failed[i] = err
+            return False
+        with lock:
+            done.append(i)
+        return True
+
+    def work() -> None:
+        while (i := take()) is not None and one(i):
+            pass
+
+    def report(upto: int) -> int:
+        with lock:
+            now = len(done)
+        if progress is not None:
+            for n in range(upto + 1, now + 1):
+                progress(n, count)
+        return now
+
+    helpers = [threading.Thread(target=work, name=f"radarsnn-frame-{k}", daemon=True)
+               for k in range(1, workers)]
+    for t in helpers:
+        t.start()
+    reported = 0
+    try:
+        while (i := take()) is not None and one(i):
+            reported = report(reported)
+    finally:
+        with lock:
+            stopped[0] = True
+        for t in helpers:
+            t.join()
+    report(reported)
+    if failed:  # the error of the earliest failing frame, as one thread would have raised it
+        raise failed[min(failed)]

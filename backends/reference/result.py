@@ -6,7 +6,41 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Activity", "SimResult"]
+__all__ = ["Activity", "SimResult", "first_step_dtype", "first_steps"]
+
+
+def first_step_dtype(n_steps: int) -> np.dtype:
+    """The smallest signed integer type that holds the step count ``n_steps`` (so every step
+    ``0 .. n_steps − 1``) and the "never" sentinel ``−1``: the dtype of
+    :attr:`SimResult.first_spike_steps`.
+
+    A frame's first-spike steps are as many as its neurons (three populations of half a
+    million for a carrada chain); stored as ``int16`` they take a quarter of ``int64``'s
+    bytes, written and paged in once per frame.
+
+    Examples
+    --------
+    >>> [first_step_dtype(n).name for n in (100, 128, 768, 40_000)]
+    ['int8', 'int16', 'int16', 'int32']
+    """
+    for dtype in (np.int8, np.int16, np.int32):
+        if n_steps <= np.iinfo(dtype).max:
+            return np.dtype(dtype)
+    return np.dtype(np.int64)
+
+
+def first_steps(first: np.ndarray, n_steps: int, shape: tuple[int, ...]) -> np.ndarray:
+    """An engine's ``int64`` first-spike steps as :attr:`SimResult.first_spike_steps`:
+    ``shape``, in :func:`first_step_dtype` (every value a step or ``−1``, so the cast is
+    exact).
+
+    Examples
+    --------
+    >>> steps = first_steps(np.array([3, -1]), 8, (1, 2))
+    >>> steps.tolist(), steps.dtype
+    ([[3, -1]], dtype('int8'))
+    """
+    return np.asarray(first).reshape(shape).astype(first_step_dtype(n_steps), copy=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -18,7 +52,9 @@ class Activity:
     first_spike : dict
         Per population, ``(n_frames, size)`` int64 first spike step, ``-1`` = never.
     counts : dict
-        Per population, ``(n_frames, size)`` int64 spikes per neuron in the frame.
+        Per population, ``(n_frames, size)`` spikes per neuron in the frame: int64, or bool
+        where a neuron spikes at most once (the closed form's fire-once and latency
+        populations: its fired mask, not copied to int64).
     membrane : dict
         Per neuron population, ``(n_frames, size)`` membrane ``v`` after the last step.
     synaptic_events : dict
@@ -53,7 +89,9 @@ class SimResult:
         Per projection, spikes delivered within the frame × synapses each reaches
         (the work a chip does; counted whether or not the target's input is on).
     first_spike_steps : dict of str to ndarray
-        Per population, int ``(n_frames, *shape)`` first spike step, ``-1`` = never.
+        Per population, ``(n_frames, *shape)`` first spike step, ``-1`` = never, in the
+        smallest signed integer type that holds ``n_steps`` and ``-1``
+        (:func:`first_step_dtype`: ``int8`` up to 127 steps, ``int16`` up to 32767).
     spikes : dict of str to ndarray or None
         Per population, bool rasters ``(n_frames, n_steps, *shape)`` when
         ``record_spikes=True``.

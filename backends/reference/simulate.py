@@ -19,7 +19,7 @@ from backends.reference.guards import (
 from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan
 from backends.reference.plan_cache import cached_plan, peek_plan
-from backends.reference.result import Activity, SimResult
+from backends.reference.result import Activity, SimResult, first_steps
 from backends.reference.run_options import ENGINE_MODES, RunOptions
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
@@ -204,7 +204,7 @@ def simulate(
         outputs=decode_outputs(network, act, framed),
         spike_counts={pid: int(c.sum()) for pid, c in act.counts.items()},
         synaptic_events=dict(act.synaptic_events),
-        first_spike_steps={pid: f.reshape(n_frames, *pops[pid].dims)
+        first_spike_steps={pid: first_steps(f, network.n_steps, (n_frames, *pops[pid].dims))
                            for pid, f in act.first_spike.items()},
         spikes=None if act.rasters is None else {
             pid: r.reshape(n_frames, network.n_steps, *pops[pid].dims)

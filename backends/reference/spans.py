@@ -85,50 +85,79 @@ class Arrivals:
         return current(self.delivery, self.k, feature, n_frames)
 
 
+#: Neurons per block of :func:`charge`'s first-crossing arithmetic: its temporaries stay
+#: at a few hundred kB (recycled by ``malloc``), not one array per neuron of the batch each.
+CHARGE_BLOCK = 1 << 17
+
+
 def charge(
-    v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams
+    v: np.ndarray, first: np.ndarray, seg: PhaseSpan, params: StepParams, *,
+    in_place: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
     """Input off, no leak: ``v`` grows by ``b`` per step; the first crossing is analytic.
 
     Only neurons that have not fired and end the span at or above threshold
     can cross in it (``v + k b`` is monotone in ``k``, rounding included), so the
-    step arithmetic runs on those candidates alone.
+    step arithmetic runs on those candidates alone, block by block of
+    :data:`CHARGE_BLOCK` neurons (elementwise: the same bits as all at once).  With
+    ``in_place`` (the caller owns ``v`` and needs its start values no more) the end
+    membranes ``v + n b`` are written into ``v`` block by block, where their type is
+    ``v``'s: no array as large as the population is allocated.
     """
     n, b0 = seg.stop - seg.start, seg.bias
     if b0 == 0 and not seg.spiking_on:
         return _zeros(v), v
     b_all = params.per_neuron(b0, v.size)  # per-neuron scales: c·b and c·v_th per neuron
-    end = v + n * b_all
-    if seg.spiking_on:
-        v_th_all = params.per_neuron(params.v_th, v.size)
-        top = end if b0 > 0 else np.maximum(v + b_all, end)
-        idle = np.flatnonzero(top >= v_th_all)
-        idle = idle[first[idle] < 0]
-        w = v[idle]
-        b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
-        if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
-            k = v_th - w
-            if params.integer:
-                k = -((-k) // b)
-            else:
-                k /= b
-                np.ceil(k, out=k)
-            np.clip(k, 1, n + 1, out=k)
-            # the rounding checks: the first k with w + k b >= v_th, as the steps add it
-            probe = k - 1
-            probe *= b
-            probe += w
-            k -= (k > 1) & (probe >= v_th)
-            np.multiply(k, b, out=probe)
-            probe += w
-            k += probe < v_th
-        else:
-            k = np.where(w + b >= v_th, 1, n + 1)
-        step = k.astype(np.int64)  # idle neurons have first = −1: write every one
-        step += seg.start - 1
-        step[step >= seg.stop] = -1
-        first[idle] = step
+    n_b = n * b_all
+    if not v.size:
+        return _zeros(v), v + n_b
+    v_th_all = params.per_neuron(params.v_th, v.size) if seg.spiking_on else None
+    end = None
+    for lo in range(0, v.size, CHARGE_BLOCK):
+        block = slice(lo, min(lo + CHARGE_BLOCK, v.size))
+        end_b = v[block] + (n_b[block] if np.ndim(n_b) else n_b)  # v + n b, per neuron
+        if seg.spiking_on:  # reads v's start values of the block before they are replaced
+            _cross(v[block], end_b, first[block], seg, params,
+                   b_all[block] if np.ndim(b_all) else b_all,
+                   v_th_all[block] if np.ndim(v_th_all) else v_th_all)
+        if end is None:
+            end = v if in_place and end_b.dtype == v.dtype else np.empty(v.shape, end_b.dtype)
+        end[block] = end_b
     return _zeros(v), end
+
+
+def _cross(v: np.ndarray, end: np.ndarray, first: np.ndarray, seg: PhaseSpan,
+           params: StepParams, b_all, v_th_all) -> None:
+    """:func:`charge`'s first crossings of one block of neurons (``v``, ``end``, ``first``
+    and any per-neuron ``b_all``, ``v_th_all`` of that block; ``first`` written)."""
+    n, b0 = seg.stop - seg.start, seg.bias
+    top = end if b0 > 0 else np.maximum(v + b_all, end)
+    idle = np.flatnonzero(top >= v_th_all)
+    idle = idle[first[idle] < 0]
+    w = v[idle]
+    b, v_th = (b0, params.v_th) if params.scale is None else (b_all[idle], v_th_all[idle])
+    if b0 > 0:  # k = ceil((v_th - w) / b), in place (float k holds whole numbers)
+        k = v_th - w
+        if params.integer:
+            k = -((-k) // b)
+        else:
+            k /= b
+            np.ceil(k, out=k)
+        np.clip(k, 1, n + 1, out=k)
+        # the rounding checks: the first k with w + k b >= v_th, as the steps add it
+        probe = k - 1
+        probe *= b
+        probe += w
+        k -= (k > 1) & (probe >= v_th)
+        np.multiply(k, b, out=probe)
+        probe += w
+        k += probe < v_th
+    else:
+        k = np.where(w + b >= v_th, 1, n + 1)
+    step = k.astype(np.int64)  # idle neurons have first = −1: write every one
+    step += seg.start - 1
+    step[step >= seg.stop] = -1
+    first[idle] = step
 
 
 def _zeros(v: np.ndarray) -> np.ndarray:
@@ -148,19 +177,24 @@ def silent(
     """
     s0, s1 = seg.start, seg.stop
     b = params.per_neuron(seg.bias, u.size) if seg.bias != 0 else seg.bias
-    total = np.zeros((n_frames, *dims), u.dtype)
-    second = np.zeros(total.shape, total.dtype)
+    keep_total = need_u or params.du != 0.0  # else nothing adds to it: zeros, not written
+    total = np.zeros((n_frames, *dims), u.dtype) if keep_total else None
+    shape = (n_frames, *dims)
+    second = None  # zeros, allocated when a delivery adds events (or none came)
     for arr in arrivals:
         if (params.du == 0.0 and not need_u
                 and (cur := arr.dense_current(s0, s1, n_frames, weighted=True)) is not None):
-            second += cur  # the bulk of a silent stage: no events, no sort
+            # the bulk of a silent stage: no events, no sort
+            second = _accumulate(second, cur, shape, u.dtype)
             continue
+        if second is None:
+            second = np.zeros(shape, u.dtype)
         flat, arrive = arr.within(s0, s1)
         if not flat.size:
             continue
         # unit weights route the silent stage's bulk delivery through the BLAS path (event
         # order is immaterial here: the silent path is exact only where every sum is exact)
-        if need_u or params.du != 0.0:
+        if keep_total:
             total += arr.delivery.current(arr.k, flat, n_frames, values=np.ones(flat.size))
         if params.du == 0.0:
             second += arr.delivery.current(arr.k, flat, n_frames, values=s1 - arrive)
@@ -168,12 +202,37 @@ def silent(
             last = arrive == s1 - 1
             if last.any():
                 second += arr.delivery.current(arr.k, flat[last], n_frames)
-    total, second = total.reshape(u.shape), second.reshape(u.shape)
+    total = total.reshape(u.shape) if keep_total else _zeros(u)
+    second = (np.zeros(shape, u.dtype) if second is None else second).reshape(u.shape)
     if params.du == 0.0 and s0 == 0:  # the first span: u = v = 0, skip the zero terms
         return total, second if seg.bias == 0 else second + s1 * b
     if params.du == 0.0:
         return u + total, v + (s1 - s0) * (u + b) + second
     return second, v + (s1 - s0) * b + total
+
+
+def _accumulate(total: np.ndarray | None, current: np.ndarray, shape: tuple[int, ...],
+                dtype) -> np.ndarray:
+    """``total += current`` with ``total`` zeros when None: the first current, a new array
+    of the dense-feature products (:data:`~backends.reference.delivery.FEATURE_CURRENTS`),
+    becomes the total in place as ``0 + current`` (``−0`` turns ``+0`` as the sum makes it),
+    instead of a population's zeros plus a copy.
+
+    Examples
+    --------
+    >>> _accumulate(None, np.array([-0.0, 2.0]), (2,), np.float64).tolist()
+    [0.0, 2.0]
+    >>> _accumulate(np.array([1.0, 1.0]), np.array([2.0, 3.0]), (2,), np.float64).tolist()
+    [3.0, 4.0]
+    """
+    if total is None:
+        if (current.shape == shape and current.dtype == dtype and current.flags.writeable
+                and current.flags.c_contiguous):
+            current += 0.0
+            return current
+        total = np.zeros(shape, dtype)
+    total += current
+    return total
 
 
 def driven(
