@@ -102,6 +102,9 @@ class BenchReport:
     #: What those workers were: the default of ``RunOptions.parallel`` as it ran here
     #: (``"threads"``, or ``"processes"`` where the system can fork).
     parallel: str = ""
+    #: Whether the process held freed memory for reuse while timing
+    #: (:func:`backends.reference.heap.hold_freed_memory`: the ``radarsnn`` command does).
+    freed_memory_held: bool = False
     #: ``user_s`` / ``system_s``: CPU seconds of the frames-axis timings (getrusage).
     cpu: dict[str, float] = field(default_factory=dict)
     #: The chain timed (a preset's range-Doppler chain, or a chain file).

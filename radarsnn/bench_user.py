@@ -66,6 +66,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
 
     from backends.reference import program_plans, run_program
     from backends.reference.frames_run import available_cores, default_parallel
+    from backends.reference.heap import held
 
     inputs, stacked = {"adc": frame}, {"adc": frames}
     t0 = time.perf_counter()
@@ -80,6 +81,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     workers = available_cores()
     report.workers, report.n_frames_axis = workers, len(frames)
     report.parallel = default_parallel()
+    report.freed_memory_held = held() is not None
     user, system = _cpu()
     per_call = medians({
         "frames_axis_1_worker": lambda: run_program(program, stacked, out_of_range="clip",
@@ -159,7 +161,8 @@ def user_path_lines(report) -> list[str]:
         return []
     lines = [f"  user's path (run_program as called; frames axis of {report.n_frames_axis}, "
              f"{report.workers} worker(s) = available cores, "
-             f"{report.parallel or 'threads'} by default)"]
+             f"{report.parallel or 'threads'} by default; freed memory "
+             f"{'held' if report.freed_memory_held else 'not held'})"]
     for k, v in report.user_path.items():
         rate = ("" if k.startswith(("compile", "host")) else
                 f" {1.0 / v if v else float('inf'):>10.2f}")

@@ -263,12 +263,16 @@ def show_warning(message, category, filename, lineno, file=None, line=None) -> N
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 1 runtime error, 2 usage error)."""
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv_given, argv = argv, list(sys.argv[1:] if argv is None else argv)
     try:
         args = build_parser(_modules_for(argv)).parse_args(argv)
     except UsageError as err:
         return _error_exit(err, argparse.Namespace(json="--json" in argv))
     configure_logging(args.verbose)
+    if argv_given is None and getattr(args, "holds_freed_memory", False):
+        from backends.reference.heap import hold_freed_memory
+
+        hold_freed_memory()  # this process is the radarsnn command: its heap is its own
     try:
         with warnings.catch_warnings():  # restores showwarning when the command ends
             warnings.showwarning = show_warning

@@ -74,7 +74,7 @@ def add_parsers(sub) -> None:
                    help="skip the spiking chain (fast: no compilation or simulation)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    p.set_defaults(func=_cmd_demo)
+    p.set_defaults(func=_cmd_demo, holds_freed_memory=True)
 
     p = sub.add_parser("bench", help="frames/s of the spiking chain vs numpy (and Brian2)")
     p.add_argument("--preset", default="carrada", choices=["seed003", "carrada"],
@@ -96,4 +96,4 @@ def add_parsers(sub) -> None:
                         "fixed-point resonators; its floor is their rotations)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    p.set_defaults(func=_cmd_bench)
+    p.set_defaults(func=_cmd_bench, holds_freed_memory=True)

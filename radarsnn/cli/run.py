@@ -182,4 +182,4 @@ def add_parsers(sub) -> None:
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing")
-    p.set_defaults(func=_cmd_run)
+    p.set_defaults(func=_cmd_run, holds_freed_memory=True)

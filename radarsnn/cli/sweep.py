@@ -95,7 +95,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
                    help="stop after N new cells (the next run goes on)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    p.set_defaults(func=run_command)
+    p.set_defaults(func=run_command, holds_freed_memory=True)
     return p
 
 
