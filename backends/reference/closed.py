@@ -107,7 +107,7 @@ def run_closed(
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
             counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
-        elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
+        elif fired.has_raster:  # stream trains: bit planes or levels, no event lists
             counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
             first[pid] = fired.first_steps()
         else:
@@ -131,13 +131,13 @@ def _fired_of_train(train: Train, n_steps: int) -> Fired:
     if first is not None:  # a latency train carries its first-spike steps
         return Fired.of_first(first, n_steps)
     if isinstance(train, StreamTrain):
-        return Fired.of_raster(train.planes, train.start, n_steps)
+        return Fired.of_stream(train.stream, n_steps)
     return Fired.of_events(*train.all_events(), n_steps)
 
 
 def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
     """Synaptic events of delay class ``k``: the spikes arriving within the window."""
-    if fired.first is None and fired.raster is not None:  # spikes per source, then synapses
+    if fired.first is None and fired.has_raster:  # spikes per source, then synapses
         per_source = synapses_per_source(dl, k)
         spiked = fired.counts_before(fired.n_steps - delay).reshape(-1, per_source.size)
         return int(spiked.sum(axis=0) @ per_source)

@@ -32,6 +32,7 @@ import numpy as np
 
 from backends.reference.input_range import DEFAULT_POLICY, check_policy, check_range
 from backends.reference.order import events_of_first
+from backends.reference.stream_levels import StreamLevels
 from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
 from compiler.snn.stream import BIT_AXIS, StreamCode
@@ -145,16 +146,26 @@ class StreamTrain:
     ([[], [0, 1], [1], []], [[0, 1, 1], [1, 1, 2]])
     """
 
-    planes: np.ndarray  # (length, frames·size) spikes per streamed index
-    start: int
+    #: The levels, row ``n`` sent at step ``start_step + n`` (cut at ``n_steps``).
+    stream: StreamLevels
     #: Bit neurons spike once per sample whose bit is set.
     at_most_once: ClassVar[bool] = False
 
     @classmethod
     def build(cls, code: StreamCode, values: np.ndarray, n_steps: int) -> StreamTrain:
-        """Bit planes of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
-        planes = code.bit_planes(values)[:max(0, n_steps - code.start_step)]
-        return cls(planes, code.start_step)
+        """Levels of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
+        levels = code.level_rows(values)[:max(0, n_steps - code.start_step)]
+        return cls(StreamLevels(levels, code.bits, code.start_step))
+
+    @property
+    def start(self) -> int:
+        """The step of row 0."""
+        return self.stream.start
+
+    @property
+    def planes(self) -> np.ndarray:
+        """``(rows, frames·size)`` boolean spikes per streamed index (built once)."""
+        return self.stream.raster()[0]
 
     def events_at(self, t: int) -> np.ndarray:
         """Flat indices of the neurons spiking at step ``t``, ascending."""

@@ -54,6 +54,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
+from backends.reference.level_drive import LevelWeights, level_current, level_weights
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
 from compiler.snn.resonator import N_COMPARTMENTS
@@ -76,7 +77,7 @@ class SharedWeights:
     the delivery's permutation into target order.
     """
 
-    __slots__ = ("weights", "block", "to_target", "dense", "order", "weights32")
+    __slots__ = ("weights", "block", "to_target", "dense", "order", "weights32", "_levels")
 
     def __init__(self, weights: np.ndarray, block: tuple[int, ...],
                  to_target: tuple[int, ...], dense: bool = False,
@@ -90,6 +91,15 @@ class SharedWeights:
         whole = np.array_equal(weights, np.rint(weights))
         small = np.abs(weights).sum(axis=0).max(initial=0.0) < 2.0 ** 24
         self.weights32 = weights.astype(np.float32) if whole and small else None
+        self._levels: dict[tuple[int, int, int], LevelWeights | None] = {}
+
+    def by_levels(self, n_reps: int, bits: int, inner: int) -> LevelWeights | None:
+        """The weights factored over the levels of a stream source of ``bits`` bits and
+        ``inner`` values after the streamed axis (dense slots only), or None (computed once)."""
+        key = (n_reps, bits, inner)
+        if key not in self._levels:
+            self._levels[key] = level_weights(self.weights, self.order, n_reps, bits, inner)
+        return self._levels[key]
 
 
 def _reduce(plan: SimPlan, dl, k: int, axis: str) -> SharedWeights | None:
@@ -163,7 +173,12 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
     n_reps, n_in = prod(red.block) // red.weights.shape[1], dl.n_in
     per_step = n_frames * n_reps * n_in
     chunk = max(1, _COUNT_BYTES // (8 * per_step))
-    if red.dense and arr.fired.raster is not None:
+    stream = arr.fired.stream if red.dense else None
+    lw = None if stream is None else red.by_levels(n_reps, stream.bits, stream.inner)
+    if lw is not None:
+        _add_level_drive(total, red, lw, arr, n_frames, s0, s1)
+        return
+    if red.dense and arr.fired.has_raster:
         _add_raster_drive(total, red, arr, n_frames, s0, s1, chunk)
         return
     flat, arrive = arr.within(s0, s1)
@@ -183,6 +198,21 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
         current = (counts @ red.weights).reshape((t1 - t0) * n_frames, *red.block)
         current = current.transpose(0, *(1 + a for a in red.to_target))
         total[(t0 - s0) * n_frames:(t1 - s0) * n_frames] += current
+
+
+def _add_level_drive(total: np.ndarray, red: SharedWeights, lw, arr, n_frames: int, s0: int,
+                     s1: int) -> None:
+    """:func:`_add_drive` from a stream train's levels (:mod:`backends.reference.level_drive`;
+    arrivals at ``n_steps`` or later cut, as for the raster)."""
+    stream = arr.fired.stream
+    first = stream.start + arr.delay  # the arrival step of level row 0
+    lo, hi = max(s0, first), min(s1, first + len(stream.levels), arr.n_steps)
+    if lo >= hi:
+        return
+    current = level_current(stream.levels, lw, lo - first, hi - first, n_frames)
+    current = current.reshape((hi - lo) * n_frames, *red.block)
+    total[(lo - s0) * n_frames:(hi - s0) * n_frames] += current.transpose(
+        0, *(1 + a for a in red.to_target))
 
 
 def _add_raster_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,

@@ -88,6 +88,23 @@ class StreamCode(CheckedModel):
         """The largest value that rounds to the top level (above it clipping changes spikes)."""
         return self.x_max + 0.5 * self.step_of_level
 
+    def level_rows(self, parts: np.ndarray) -> np.ndarray:
+        """Levels as ``(L, frames, pre, inner)`` unsigned ints from ``(frames, size)`` parts
+        (gains applied): row ``n`` is sent at step ``start_step + n``.
+
+        Examples
+        --------
+        >>> code = StreamCode(axis="n", length=2, inner=1, bits=2, x_max=3.0)
+        >>> code.level_rows(np.array([[1.0, 2.0]])).reshape(2).tolist()
+        [1, 2]
+        """
+        f = parts.shape[0]
+        z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
+        if self.gains:
+            z = z * np.asarray(self.gains)[None, None, :, None]
+        narrow = np.uint16 if self.bits <= 16 else np.uint32  # the levels' bits, less memory
+        return np.moveaxis(self.levels(z), 2, 0).astype(narrow, order="C")  # L, f, pre, in
+
     def bit_planes(self, parts: np.ndarray) -> np.ndarray:
         """Spikes as ``(L, frames · pre · B · inner)`` booleans from ``(frames, size)`` parts.
 
@@ -97,12 +114,7 @@ class StreamCode(CheckedModel):
         >>> code.bit_planes(np.array([[1.0, 2.0]])).astype(int).tolist()
         [[1, 0], [0, 1]]
         """
-        f = parts.shape[0]
-        z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
-        if self.gains:
-            z = z * np.asarray(self.gains)[None, None, :, None]
-        narrow = np.uint16 if self.bits <= 16 else np.uint32  # the levels' bits, less memory
-        q = np.moveaxis(self.levels(z), 2, 0).astype(narrow, order="C")  # L, f, pre, in
+        q = self.level_rows(parts)
         planes = np.empty((self.length, *q.shape[1:3], self.bits, q.shape[3]), bool)
         bit = np.empty_like(q)
         for b in range(self.bits):  # one plane per bit, written in place: no int64 cube

@@ -1,0 +1,111 @@
+r"""A stream train kept as its integer levels: the bit planes are never materialised unless
+something asks for events.
+
+A stream code (:mod:`compiler.snn.stream`) sends the level ``q_n`` of sample ``n`` as bit
+neurons: neuron ``(frame, pre, b, inner)`` spikes at step ``start + n`` iff bit ``b`` of
+``q[n, frame, pre, inner]`` is set.  Everything the closed form needs follows from the
+``(steps, frames, pre, inner)`` level array ``q`` directly, ``B`` times smaller than the
+boolean raster:
+
+* spikes per neuron before a step: the count of rows ``n`` with bit ``b`` of ``q_n`` set;
+* first spike step: with ``s_n = q_0 | … | q_n`` (an OR-accumulation down the rows), bit
+  ``b`` is first set at row ``m − #\{n : b ∈ s_n\}`` of the ``m`` rows (the rows before it
+  lack the bit, every row from it on has it), ``−1`` if never;
+* the drive of a projection whose weights are ``2^b V`` on bit ``b``
+  (:mod:`backends.reference.resonator_drive`): ``Σ_b [b ∈ q] 2^b V = (q & mask) V``.
+
+Examples
+--------
+Two samples of one neuron column with 2 bits: levels 2 then 3.
+
+>>> s = StreamLevels(np.array([[[[2]]], [[[3]]]], np.uint16), bits=2, start=1)
+>>> s.raster()[0].astype(int).tolist()  # neurons (bit 0, bit 1) per step
+[[0, 1], [1, 1]]
+>>> s.counts_before(2).tolist(), s.counts_before(9).tolist(), s.first_steps().tolist()
+([0, 1], [1, 2], [2, 1])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["StreamLevels"]
+
+#: Bits counted at once, each in a 9-bit field of a uint64 (counts up to 511).
+_SPREAD_BITS, _FIELD_MAX = 7, 511
+#: Spread levels per chunk (256 kB of uint64: reused, no page faults per call).
+_CHUNK_ENTRIES = 1 << 15
+_FIELDS = np.arange(_SPREAD_BITS, dtype=np.uint64) * np.uint64(9)
+#: ``_SPREAD[v]``: bit ``b`` of ``v`` moved to bit ``9 b``.
+_SPREAD = np.array([sum(((v >> b) & 1) << (9 * b) for b in range(_SPREAD_BITS))
+                    for v in range(1 << _SPREAD_BITS)], np.uint64)
+
+
+class StreamLevels:
+    """The levels ``(steps, frames, pre, inner)`` (unsigned ints) of a stream train whose row
+    ``n`` is sent at step ``start + n`` as ``bits`` bit neurons per level (see the module
+    docstring); neurons are ordered ``(frames, pre, bits, inner)``."""
+
+    __slots__ = ("levels", "bits", "start", "_raster")
+
+    def __init__(self, levels: np.ndarray, bits: int, start: int) -> None:
+        self.levels, self.bits, self.start = levels, bits, start
+        self._raster: np.ndarray | None = None
+
+    @property
+    def inner(self) -> int:
+        """Values after the streamed axis (the level columns of one ``pre`` index)."""
+        return self.levels.shape[3]
+
+    def raster(self) -> tuple[np.ndarray, int]:
+        """``(rows, start)``: the boolean bit planes ``(steps, neurons)`` (built once)."""
+        if self._raster is None:
+            q = self.levels
+            planes = np.empty((*q.shape[:3], self.bits, q.shape[3]), bool)
+            bit = np.empty_like(q)
+            for b in range(self.bits):  # one plane per bit, written in place
+                np.bitwise_and(q, 1 << b, out=bit)
+                np.not_equal(bit, 0, out=planes[:, :, :, b, :])
+            self._raster = planes.reshape(len(q), int(np.prod(planes.shape[1:])))
+        return self._raster, self.start
+
+    def _bit_counts(self, q: np.ndarray) -> np.ndarray:
+        """Rows of ``q`` with each bit set, per neuron (flat ``(frames, pre, bits, inner)``).
+
+        Seven bits at a time: each level's bits are spread into 9-bit fields of a uint64
+        (a 128-entry table), so one sum down the rows (at most 511 at a time: no field
+        overflows) counts seven bits at once.
+        """
+        flat = q.reshape(len(q), int(np.prod(q.shape[1:])))
+        n = flat.shape[1]
+        counts = np.zeros((n, self.bits), np.int64)
+        step = max(1, min(_FIELD_MAX, _CHUNK_ENTRIES // max(1, n)))  # rows per chunk
+        sel = np.empty((min(len(flat), step), n), flat.dtype)  # buffers reused per chunk
+        spread = np.empty(sel.shape, np.uint64)
+        for lo in range(0, self.bits, _SPREAD_BITS):
+            nb = min(_SPREAD_BITS, self.bits - lo)
+            for w0 in range(0, len(flat), _FIELD_MAX):  # at most 511 rows per field sum
+                total = np.zeros(n, np.uint64)
+                for r0 in range(w0, min(len(flat), w0 + _FIELD_MAX), step):
+                    rows = flat[r0:min(r0 + step, w0 + _FIELD_MAX)]
+                    s, t = sel[:len(rows)], spread[:len(rows)]
+                    np.right_shift(rows, lo, out=s)
+                    np.bitwise_and(s, (1 << nb) - 1, out=s)
+                    np.take(_SPREAD, s, out=t)
+                    total += t.sum(axis=0, dtype=np.uint64)
+                counts[:, lo:lo + nb] += ((total[:, None] >> _FIELDS[:nb])
+                                          & np.uint64(_FIELD_MAX)).astype(np.int64)
+        shape = (*q.shape[1:3], q.shape[3], self.bits)
+        return counts.reshape(shape).transpose(0, 1, 3, 2).reshape(-1)
+
+    def counts_before(self, stop: int) -> np.ndarray:
+        """Spikes per neuron at steps below ``stop`` (int64)."""
+        return self._bit_counts(self.levels[:max(0, stop - self.start)])
+
+    def first_steps(self) -> np.ndarray:
+        """First spike step per neuron, ``-1``: none."""
+        seen = np.empty_like(self.levels)
+        for r, row in enumerate(self.levels):  # row passes (down the columns is slower)
+            np.bitwise_or(seen[r - 1], row, out=seen[r]) if r else np.copyto(seen[0], row)
+        count = self._bit_counts(seen)
+        return np.where(count > 0, self.start + len(seen) - count, -1)

@@ -1,0 +1,105 @@
+"""A stream train kept as its levels (backends/reference/stream_levels.py) and the shared
+drive computed from them (backends/reference/level_drive.py): equal to what the bit planes
+give — counts, first spike steps, raster, and the count table times the weights — and the
+factorisation declining every weight matrix it cannot reproduce exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from backends.reference.level_drive import level_current, level_weights
+from backends.reference.stream_levels import StreamLevels
+from compiler.snn.stream import StreamCode
+
+
+@settings(max_examples=80, deadline=None)
+@given(m=st.integers(0, 700), f=st.integers(1, 2), pre=st.integers(1, 3),
+       inner=st.integers(1, 4), bits=st.integers(1, 24), start=st.integers(0, 3),
+       density=st.floats(0.0, 1.0), seed=st.integers(0, 2 ** 16))
+def test_counts_and_first_steps_are_those_of_the_bit_planes(m, f, pre, inner, bits, start,
+                                                            density, seed):
+    rng = np.random.default_rng(seed)
+    q = rng.integers(0, 1 << bits, (m, f, pre, inner))
+    q[rng.random(q.shape) > density] = 0  # sparse columns and never-set bits
+    q = q.astype(np.uint16 if bits <= 16 else np.uint32)
+    s = StreamLevels(q, bits, start)
+    rows, got_start = s.raster()
+    want = np.zeros((m, f, pre, bits, inner), bool)
+    for b in range(bits):
+        want[:, :, :, b, :] = (q >> b) & 1 == 1
+    np.testing.assert_array_equal(rows, want.reshape(m, f * pre * bits * inner))
+    assert got_start == start
+    for stop in (0, start, start + m // 3, start + m, start + m + 5):
+        np.testing.assert_array_equal(s.counts_before(stop),
+                                      rows[:max(0, stop - start)].sum(axis=0))
+    first = np.where(rows.any(axis=0), rows.argmax(axis=0) + start, -1) if m else -np.ones(
+        rows.shape[1], np.int64)
+    np.testing.assert_array_equal(s.first_steps(), first)
+
+
+def test_hand_worked_levels():
+    # levels 5 (101b), 2 (010b), 4 (100b) of one neuron column, 3 bits, from step 2
+    s = StreamLevels(np.array([5, 2, 4], np.uint16).reshape(3, 1, 1, 1), 3, 2)
+    assert s.counts_before(3).tolist() == [1, 0, 1]
+    assert s.counts_before(10).tolist() == [1, 1, 2]
+    assert s.first_steps().tolist() == [2, 3, 2]
+
+
+def test_stream_code_levels_are_the_rows_of_the_bit_planes():
+    code = StreamCode(axis="n", length=3, inner=2, bits=4, x_max=15.0, gains=(1.0, 0.5, 2.0))
+    x = np.array([[3.0, 15.0, 8.0, 2.0, 1.0, 7.0]])  # (n, inner) = [[3, 15], [8, 2], [1, 7]]
+    q = code.level_rows(x)
+    assert q.reshape(3, 2).tolist() == [[3, 15], [4, 1], [2, 14]]
+    np.testing.assert_array_equal(StreamLevels(q, 4, 0).raster()[0], code.bit_planes(x))
+
+
+def _layout(n_reps, n_cols, bits, inner, rng):
+    """A random slot order of source neurons ``(pre, bit, inner)`` over ``n_reps`` repetitions
+    of ``n_cols`` level columns × ``bits`` input columns, in a random column order."""
+    pre = n_reps * n_cols // inner
+    neuron = np.arange(pre * bits * inner).reshape(pre, bits, inner)
+    by_col = neuron.transpose(0, 2, 1).reshape(n_reps, n_cols, bits)  # (rep, c, b)
+    perm = rng.permutation(n_cols * bits)
+    slots = by_col.reshape(n_reps, -1)[:, perm]  # slot (rep, input column) → neuron
+    c_of, b_of = np.divmod(perm, bits)
+    return slots.reshape(-1), c_of, b_of
+
+
+@settings(max_examples=80, deadline=None)
+@given(n_reps=st.integers(1, 4), inner=st.integers(1, 3), per=st.integers(1, 2),
+       bits=st.integers(1, 12), n_out=st.integers(1, 3), m=st.integers(1, 9),
+       frames=st.integers(1, 2), drop=st.integers(0, 4), seed=st.integers(0, 2 ** 16))
+def test_level_current_is_the_count_table_times_the_weights(n_reps, inner, per, bits, n_out, m,
+                                                            frames, drop, seed):
+    rng = np.random.default_rng(seed)
+    n_cols = inner * per  # level columns per repetition (whole pre indices)
+    order, c_of, b_of = _layout(n_reps, n_cols, bits, inner, rng)
+    v = rng.integers(-5, 6, (n_cols, n_out)).astype(np.float64)
+    w = v[c_of] * 2.0 ** b_of[:, None]
+    w[b_of < drop] = 0.0  # a projection of the upper bits only: masked levels
+    q = rng.integers(0, 1 << bits, (m, frames, n_reps * n_cols // inner, inner)).astype(
+        np.uint16)
+    lw = level_weights(w, order, n_reps, bits, inner)
+    assert lw is not None
+    raster = StreamLevels(q, bits, 0).raster()[0].reshape(m, frames, -1)
+    counts = raster[:, :, order].reshape(-1, w.shape[0]).astype(np.float64)
+    for r0, r1 in ((0, m), (m // 2, m)):
+        want = counts.reshape(m, -1)[r0:r1].reshape(-1, w.shape[0]) @ w
+        np.testing.assert_array_equal(level_current(q, lw, r0, r1, frames), want)
+
+
+def test_level_weights_decline_what_they_cannot_reproduce():
+    bits, inner = 3, 2
+    w = np.array([[1.0], [-1.0], [2.0], [-2.0], [4.0], [-4.0]])  # column (b, c): 2^b·(1, −1)
+    assert level_weights(w, None, 1, bits, inner) is not None
+    assert level_weights(w * 0.75, None, 1, bits, inner) is None  # fractional V
+    odd = w.copy()
+    odd[4] = 3.0  # bit 2 of column 0 not 4·V
+    assert level_weights(odd, None, 1, bits, inner) is None
+    big = w * 2.0 ** 50  # (2^B − 1)·Σ|V| past 2^52: the float sums could round
+    assert level_weights(big, None, 1, bits, inner) is None
+    # slots whose bit differs between repetitions: not one level column per input column
+    order = np.array([0, 1, 2, 3, 4, 5, 8, 9, 6, 7, 10, 11])
+    assert level_weights(np.tile(w, 1), order, 2, bits, inner) is None
