@@ -169,35 +169,47 @@ def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | 
     """
     out = np.empty_like(z)
     rows = max(1, _BLOCK_ENTRIES // (z.shape[1] * z.shape[2]))
-    ones = np.ones(max(z.shape[1], 1), np.complex128)
+    coef = [a_end if ends is not None and ends[j] else a for j in range(n_steps)]
     for r0 in range(0, z.shape[0], rows):
         block = z[r0:r0 + rows].copy()
         flat = block.view(np.float64)
-        part = None if drive is None else drive[:, r0:r0 + rows]
+        add = None if drive is None else _drive_adder(block, drive[:n_steps, r0:r0 + rows])
         for j in range(n_steps):
-            if part is not None:
-                _add_drive(block, part[j], ones)
-            block *= a_end if ends is not None and ends[j] else a
-            flat *= _AWAY
+            if add is not None:
+                add(j)
+            np.multiply(block, coef[j], out=block)
+            np.multiply(flat, _AWAY, out=flat)
             np.rint(flat, out=flat)
         out[r0:r0 + rows] = block
     return out
 
 
-def _add_drive(block: np.ndarray, d: np.ndarray, ones: np.ndarray) -> None:
-    """``block += d`` in place (``(rb, K, P)`` and ``(rb, 1 | K, P)``): a drive shared along
-    the bins as rank-one updates (BLAS ``zgeru``: ``1·d`` is ``d``, the sums are the same
+def _drive_adder(block: np.ndarray, part: np.ndarray):
+    """``add(j)``: ``block += part[j]`` in place (``block`` ``(rb, K, P)``, ``part``
+    ``(m, rb, 1 | K, P)``).  A drive shared along the bins is added as rank-one updates
+    (BLAS ``zgeru`` on F-ordered views of ``block``: ``1·d`` is ``d``, the sums are the same
     exact sums), which skip numpy's per-row broadcasting; else a plain ``+=``."""
     rb, k, p = block.shape
-    if d.shape[1] != 1 or (p > 1 and rb > 8):
-        block += d
-        return
-    pairs = ([(block.reshape(rb, k).T, ones, d.reshape(rb))] if p == 1 else
-             [(block[r].T, d[r, 0], ones) for r in range(rb)])  # F-ordered views of block
-    for view, x, y in pairs:
-        res = _zgeru(1.0, x, y, a=view, overwrite_a=True)
-        if not np.shares_memory(res, view):  # pragma: no cover (scipy copied: write back)
-            view[...] = res
+    if part.shape[2] != 1 or (p > 1 and rb > 8):
+        return lambda j: np.add(block, part[j], out=block)
+    ones = np.ones(k, np.complex128)
+    if p == 1:  # one update of the (K, rb) view per step: x = ones, y = the rows' drives
+        views = [(block.reshape(rb, k).T, part.reshape(len(part), rb))]
+    else:  # one per row: the (P, K) view of row r, x = its drives along P, y = ones
+        views = [(block[r].T, part[:, r, 0, :]) for r in range(rb)]
+    first = views[0][0]
+    probe = _zgeru(0.0, np.zeros(first.shape[0], np.complex128),
+                   np.zeros(first.shape[1], np.complex128), a=first, overwrite_a=True)
+    if not np.shares_memory(probe, first):  # pragma: no cover (scipy would copy)
+        return lambda j: np.add(block, part[j], out=block)
+    if p == 1:
+        view, ys = views[0]
+        return lambda j: _zgeru(1.0, ones, ys[j], a=view, overwrite_a=True)
+
+    def add(j: int) -> None:
+        for view, xs in views:
+            _zgeru(1.0, xs[j], ones, a=view, overwrite_a=True)
+    return add
 
 
 def _exact(z, d, a, a_end, bits: int) -> bool:
