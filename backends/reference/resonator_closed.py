@@ -37,6 +37,8 @@ Examples
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 from scipy.linalg.blas import zgeru as _zgeru
 
@@ -55,6 +57,10 @@ _BLOCK_ENTRIES = 1 << 15
 #: Resonators × steps of one full drive histogram (a drive not shared along the bins): its
 #: four compartments in float64 take 8 MiB.
 _FULL_ENTRIES = 1 << 18
+#: ``√2`` rounded up: ``|d| ≤ _SQRT2 · max(|Re d|, |Im d|)``.
+_SQRT2 = 1.4142135623730951 * (1.0 + 2.0 ** -50)
+#: :func:`input_layout` per plan's population parameters.
+_LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
@@ -91,9 +97,9 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
         shared = shared_drive(plan, pid, arrivals, n_frames, seg.start, seg.stop)
         blocks = ([(seg.start, shared.reshape(-1, shape[0], 1, tail))]
                   if shared is not None else _full_blocks(full, seg, shape))
-        for s0, d in blocks:
+        for s0, d in blocks:  # (a shared drive is whole in fixed point: resonator_drive)
             z = (_linear(z, d, coefs[0]) if not params.coef_bits
-                 else _replay(z, d, s0, params, coefs))
+                 else _replay(z, d, s0, params, coefs, whole=shared is not None))
         v = _project(z, dtype)
     return v
 
@@ -103,7 +109,15 @@ def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
     """``((lead, K, P), (a, a_end))`` of resonator population ``pid``: one frame's state is
     ``(lead, K, P)`` (the axes before the resonator axis, its bins, the axes after it but
     ``part``); ``a`` and ``a_end`` are ``(K, P)`` complex, divided by ``2^F`` in fixed point
-    (``a_end`` None without renormalisation)."""
+    (``a_end`` None without renormalisation); computed once per plan's population (read-only
+    arrays)."""
+    params = plan.neurons[pid]
+    if params not in _LAYOUTS:
+        _LAYOUTS[params] = _layout(plan, pid)
+    return _LAYOUTS[params]
+
+
+def _layout(plan: SimPlan, pid: str):
     params = plan.neurons[pid]
     pop = plan.populations[pid]
     at = pop.axes.index(plan.network.population[pid].params.axis)
@@ -115,7 +129,11 @@ def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
             lead, k, tail)[0].copy()
 
     end = of(params.cos_end, params.sin_end) if params.renorm is not None else None
-    return (lead, k, tail), (of(params.cos, params.sin), end)
+    coefs = (of(params.cos, params.sin), end)
+    for c in coefs:
+        if c is not None:
+            c.setflags(write=False)
+    return (lead, k, tail), coefs
 
 
 def _full_blocks(full, seg, shape):
@@ -143,13 +161,14 @@ def _linear(z: np.ndarray, d: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 
 def _replay(z: np.ndarray, d: np.ndarray, s0: int, params: ResonatorStepParams,
-            coefs: tuple[np.ndarray, np.ndarray | None]) -> np.ndarray:
-    """The fixed-point steps ``s0 … s0 + m − 1`` (see the module docstring)."""
+            coefs: tuple[np.ndarray, np.ndarray | None], whole: bool = False) -> np.ndarray:
+    """The fixed-point steps ``s0 … s0 + m − 1`` (see the module docstring); ``whole``: the
+    drive is known to be whole (not checked again)."""
     m = d.shape[0]
     a, a_end = coefs
     ends = (params.renorm[s0:s0 + m] if params.renorm is not None
             else np.zeros(m, bool))
-    if not _exact(z, d, a, a_end, params.coef_bits):
+    if not _exact(z, d, a, a_end, params.coef_bits, whole):
         return _replay_steps(z, d, s0, params, coefs)
     return replay_rows(z, a, m, d, a_end, ends)
 
@@ -212,20 +231,29 @@ def _drive_adder(block: np.ndarray, part: np.ndarray):
     return add
 
 
-def _exact(z, d, a, a_end, bits: int) -> bool:
-    """Whether the float64 replay is exact: whole drives, ``2^{F+1}|z̃| < 2^{52}`` and
-    ``|u| < 2^{49−F}`` for the bound ``|z̃|`` of every step's ``z + d``."""
-    if not np.array_equal(d, np.rint(d)):
+def _exact(z, d, a, a_end, bits: int, whole: bool = False) -> bool:
+    """Whether the float64 replay is exact: whole drives (checked unless ``whole``),
+    ``2^{F+1}|z̃| < 2^{52}`` and ``|u| < 2^{49−F}`` for the bound ``|z̃|`` of every step's
+    ``z + d`` (``|d|`` bounded by ``√2`` times its largest component)."""
+    if not whole and not np.array_equal(d, np.rint(d)):
         return False
     growth = max(float(np.abs(a).max()), float(np.abs(a_end).max()) if a_end is not None
                  else 0.0)
-    top = np.abs(d).reshape(d.shape[0], -1).max(axis=1)
-    bound, worst = float(np.abs(z).max(initial=0.0)), 0.0
+    top = _SQRT2 * _largest(d)
+    bound, worst = _SQRT2 * float(_largest(z[None])[0]), 0.0
     for dj in top.tolist():
         bound += dj
         worst = max(worst, bound)
         bound = growth * bound + 1.0
     return worst * 2.0 ** (bits + 1) < 2.0 ** 52 and worst * growth < 2.0 ** (49 - bits)
+
+
+def _largest(d: np.ndarray) -> np.ndarray:
+    """The largest ``|Re|, |Im|`` per leading index (0 if empty)."""
+    c = np.ascontiguousarray(d).view(np.float64).reshape(d.shape[0], -1)
+    if c.shape[1] == 0:
+        return np.zeros(d.shape[0])
+    return np.maximum(c.max(axis=1), -c.min(axis=1))
 
 
 def _replay_steps(z, d, s0, params, coefs):
