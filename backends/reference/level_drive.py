@@ -43,13 +43,24 @@ class LevelWeights:
     """The factored weights of one delay class: the level column ``cols[rep, c]`` of each
     repetition, the bits ``mask[c]`` it sends and ``weights`` ``V`` (``C × n_out``)."""
 
-    __slots__ = ("cols", "mask", "weights", "full")
+    __slots__ = ("cols", "mask", "weights", "bits", "full", "identity", "key")
 
     def __init__(self, cols: np.ndarray, mask: np.ndarray, weights: np.ndarray,
                  bits: int) -> None:
-        self.cols, self.mask, self.weights = cols, mask, weights
+        self.cols, self.mask, self.weights, self.bits = cols, mask, weights, bits
         #: Every column sends every bit (no masking needed).
         self.full = bool(np.all(mask == (1 << bits) - 1))
+        #: The columns are the levels' own order (no gather needed).
+        self.identity = bool(np.array_equal(cols.reshape(-1), np.arange(cols.size)))
+        #: Equal for weights that differ in their masks alone (:meth:`merged`).
+        self.key = (cols.shape, weights.shape, bits, cols.tobytes(), weights.tobytes())
+
+    def merged(self, other: LevelWeights) -> LevelWeights | None:
+        """One factorisation sending the bits of both (same columns and ``V``, disjoint
+        masks: ``(q & m_1)V + (q & m_2)V = (q & (m_1 | m_2))V``), or None."""
+        if self.key != other.key or np.any(self.mask & other.mask):
+            return None
+        return LevelWeights(self.cols, self.mask | other.mask, self.weights, self.bits)
 
 
 def level_weights(weights: np.ndarray, order: np.ndarray | None, n_reps: int, bits: int,
@@ -103,9 +114,12 @@ def level_current(levels: np.ndarray, lw: LevelWeights, r0: int, r1: int,
     for a in range(r0, r1, chunk):
         b = min(r1, a + chunk)
         q = levels[a:b].reshape(b - a, n_frames, -1)
-        picked = np.take(q, lw.cols.reshape(-1), axis=2).reshape(-1, n_cols)
+        if lw.identity and q.shape[2] == lw.cols.size:
+            picked = q.reshape(-1, n_cols)
+        else:
+            picked = np.take(q, lw.cols.reshape(-1), axis=2).reshape(-1, n_cols)
         if not lw.full:
-            picked &= lw.mask.astype(picked.dtype)
+            picked = picked & lw.mask.astype(picked.dtype)
         np.matmul(picked.astype(np.float64), lw.weights,
                   out=out[(a - r0) * per_row:(b - r0) * per_row])
     return out

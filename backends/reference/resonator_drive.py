@@ -161,23 +161,43 @@ def shared_drive(plan: SimPlan, pid: str, arrivals: list, n_frames: int, s0: int
     dims = tuple(1 if a == axis else s for a, s in zip(pop.axes, pop.dims, strict=True))
     n_t = s1 - s0
     total = np.zeros((n_t * n_frames, *dims))
-    for red, arr in reduced:
-        _add_drive(total, red, arr, n_frames, s0, s1)
+    for red, arr, lw in _merge_levels(reduced):
+        if lw is not None:
+            _add_level_drive(total, red, lw, arr, n_frames, s0, s1)
+        else:
+            _add_drive(total, red, arr, n_frames, s0, s1)
     return fold(total.reshape(n_t, n_frames, *dims[:-1], N_COMPARTMENTS))
+
+
+def _merge_levels(reduced: list) -> list:
+    """``(red, arr, lw)`` per arrival class, ``lw`` its factorisation over a stream source's
+    levels (None: the raster or events); classes from the same stream with the same delay,
+    layout and ``V`` but disjoint bits (the bit groups of one motif) merged into one."""
+    out = []
+    for red, arr in reduced:
+        stream = arr.fired.stream if red.dense else None
+        n_reps = prod(red.block) // red.weights.shape[1]
+        lw = None if stream is None else red.by_levels(n_reps, stream.bits, stream.inner)
+        for i, (red0, arr0, lw0) in enumerate(out):
+            if (lw is not None and lw0 is not None and arr0.fired is arr.fired
+                    and arr0.delay == arr.delay and red0.block == red.block
+                    and red0.to_target == red.to_target
+                    and (both := lw0.merged(lw)) is not None):
+                out[i] = (red0, arr0, both)
+                break
+        else:
+            out.append((red, arr, lw))
+    return out
 
 
 def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,
                s1: int) -> None:
-    """``total += `` the current of ``arr``'s events in ``[s0, s1)`` through ``red``."""
+    """``total += `` the current of ``arr``'s events in ``[s0, s1)`` through ``red`` (the
+    raster's rows or the events counted)."""
     dl = arr.delivery
     n_reps, n_in = prod(red.block) // red.weights.shape[1], dl.n_in
     per_step = n_frames * n_reps * n_in
     chunk = max(1, _COUNT_BYTES // (8 * per_step))
-    stream = arr.fired.stream if red.dense else None
-    lw = None if stream is None else red.by_levels(n_reps, stream.bits, stream.inner)
-    if lw is not None:
-        _add_level_drive(total, red, lw, arr, n_frames, s0, s1)
-        return
     if red.dense and arr.fired.has_raster:
         _add_raster_drive(total, red, arr, n_frames, s0, s1, chunk)
         return
