@@ -99,11 +99,18 @@ class StreamCode(CheckedModel):
         [1, 2]
         """
         f = parts.shape[0]
-        z = np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner)
+        z = np.moveaxis(np.asarray(parts, np.float64).reshape(f, -1, self.length, self.inner),
+                        2, 0)  # L, f, pre, in (a view)
+        q = np.empty(z.shape)  # one buffer, the steps of levels() in place
         if self.gains:
-            z = z * np.asarray(self.gains)[None, None, :, None]
-        narrow = np.uint16 if self.bits <= 16 else np.uint32  # the levels' bits, less memory
-        return np.moveaxis(self.levels(z), 2, 0).astype(narrow, order="C")  # L, f, pre, in
+            np.multiply(z, np.asarray(self.gains)[:, None, None, None], out=q)
+        else:
+            np.copyto(q, z)
+        np.maximum(q, 0.0, out=q)  # clip to [0, x_max]
+        np.minimum(q, self.x_max, out=q)
+        np.divide(q, self.step_of_level, out=q)
+        np.rint(q, out=q)
+        return q.astype(np.uint16 if self.bits <= 16 else np.uint32)  # whole, below 2^bits
 
     def bit_planes(self, parts: np.ndarray) -> np.ndarray:
         """Spikes as ``(L, frames · pre · B · inner)`` booleans from ``(frames, size)`` parts.
