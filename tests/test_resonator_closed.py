@@ -262,3 +262,27 @@ def test_level_drive_is_the_step_engine(k, q, bits, group, n_in, frames, seed, d
     assert not raster.called
     _assert_equal(step, new)
     _assert_equal(old, new)
+
+
+@settings(max_examples=60, deadline=None)
+@given(m=st.integers(1, 5), r=st.integers(0, 4), seed=st.integers(0, 2 ** 16))
+def test_largest_component_bounds_the_modulus(m, r, seed):
+    from backends.reference.resonator_closed import _SQRT2, _largest
+
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(m, r, 2)) @ np.array([1, 1j]) * 10.0 ** rng.integers(0, 12)
+    top = _largest(d)
+    want = np.abs(d).max(axis=1, initial=0.0)
+    assert np.all(want <= _SQRT2 * top) and np.all(top <= want)
+    assert _largest(np.zeros((2, 0), complex)).tolist() == [0.0, 0.0]
+
+
+def test_exact_bound_refuses_a_fractional_drive_unless_told_it_is_whole():
+    from backends.reference.resonator_closed import _exact
+
+    z, a = np.zeros((1, 1, 1), complex), np.full((1, 1), 0.5 + 0j)
+    half = np.full((1, 1, 1, 1), 0.5 + 0j)
+    assert not _exact(z, half, a, None, 12)
+    assert _exact(z, np.ones((1, 1, 1, 1), complex), a, None, 12)
+    big = np.full((1, 1, 1, 1), 2.0 ** 40 + 0j)  # 2^(F+1)·|z + d| reaches 2^52
+    assert not _exact(z, big, a, None, 12, whole=True)

@@ -103,3 +103,20 @@ def test_level_weights_decline_what_they_cannot_reproduce():
     # slots whose bit differs between repetitions: not one level column per input column
     order = np.array([0, 1, 2, 3, 4, 5, 8, 9, 6, 7, 10, 11])
     assert level_weights(np.tile(w, 1), order, 2, bits, inner) is None
+
+
+def test_bit_groups_merge_only_when_disjoint_with_the_same_factor():
+    bits, inner = 4, 1
+    w = 2.0 ** np.arange(bits)[:, None]  # one level column, V = 1
+    low, high = w.copy(), w.copy()
+    low[2:], high[:2] = 0.0, 0.0
+    lw_low, lw_high = (level_weights(x, None, 1, bits, inner) for x in (low, high))
+    assert (lw_low.mask.tolist(), lw_high.mask.tolist()) == ([3], [12])
+    both = lw_low.merged(lw_high)
+    assert both.mask.tolist() == [15] and both.full
+    q = np.arange(16, dtype=np.uint16).reshape(16, 1, 1, 1)
+    np.testing.assert_array_equal(level_current(q, both, 0, 16, 1),
+                                  level_current(q, lw_low, 0, 16, 1)
+                                  + level_current(q, lw_high, 0, 16, 1))
+    assert lw_low.merged(lw_low) is None  # overlapping bits
+    assert lw_low.merged(level_weights(3 * high, None, 1, bits, inner)) is None  # another V
