@@ -23,10 +23,19 @@ rounding half away from zero is ``rint(u·(1 + 2^{-51}))``: the factor moves an 
 ``2^{-51}|u| ≥ 2`` ulps away from zero, and any other ``u`` by less than ``2^{-50}|u|``,
 which stays below the ``2^{-F}`` between ``u`` and the nearest half while
 ``|u| < 2^{49-F}``.  Both conditions are checked before the replay from a bound on
-``|z|`` (``|z| ← |a|(|z| + max|d|) + 1``); where they fail the step arithmetic
-(:func:`~backends.reference.resonator.rotate`, int64 or float64) runs instead, as it
-does for fractional drives in float64.  Either way the result is the step engine's, bit
-for bit (``tests/test_resonator_closed.py``).
+``|z|`` (``|z| ← |a|(|z| + max|d|) + 1``, with ``|d| ≤ √2·max(|Re d|, |Im d|)`` per step);
+where they fail the step arithmetic (:func:`~backends.reference.resonator.rotate`, int64
+or float64) runs instead, as it does for fractional drives in float64.  Either way the
+result is the step engine's, bit for bit (``tests/test_resonator_closed.py``).
+
+*Cost per step and row block* (``rb × K × P`` entries): the rotation is three in-place
+passes — the complex product by ``a``, the factor ``1 + 2^{-51}``, ``rint`` — which is the
+floor of :func:`backends.reference.floor.rotation_floors`; the drive adds a fourth, since
+each step's drive enters before that step's rounding (no two steps' drives can be summed
+first).  A drive shared along the bins is added as a rank-one update (``zgeru``: the ``(K,
+rb)`` view plus ``1 ⊗ d_j`` when ``P = 1``, else the ``(P, K)`` view of each row plus
+``d_{j,r} ⊗ 1``), BLAS calls prepared once per block.  The drive itself comes from the
+stream source's levels (:mod:`backends.reference.level_drive`), never from its bit planes.
 
 Examples
 --------
