@@ -33,13 +33,12 @@ __all__ = ["StreamLevels"]
 
 #: Bits counted at once, each in a 9-bit field of a uint64 (counts up to 511).
 _SPREAD_BITS, _FIELD_MAX = 7, 511
-#: Spread levels per chunk (256 kB of uint64: reused, no page faults per call).
-_CHUNK_ENTRIES = 1 << 15
+#: Spread levels per chunk (512 kB of uint64, reused within a call).
+_CHUNK_ENTRIES = 1 << 16
 _FIELDS = np.arange(_SPREAD_BITS, dtype=np.uint64) * np.uint64(9)
-#: ``_SPREAD[v]``: bit ``b`` of ``v`` moved to bit ``9 b``.
-_SPREAD = np.array([sum(((v >> b) & 1) << (9 * b) for b in range(_SPREAD_BITS))
-                    for v in range(1 << _SPREAD_BITS)], np.uint64)
-
+#: ``Σ_k 2^{8k}`` (seven copies of a 7-bit slice) and ``Σ_k 2^{9k}`` (bit ``k`` of copy ``k``).
+_COPIES = np.uint64(sum(1 << (8 * k) for k in range(_SPREAD_BITS)))
+_FIELD_BITS = np.uint64(sum(1 << (9 * k) for k in range(_SPREAD_BITS)))
 
 class StreamLevels:
     """The levels ``(steps, frames, pre, inner)`` (unsigned ints) of a stream train whose row
@@ -72,27 +71,28 @@ class StreamLevels:
     def _bit_counts(self, q: np.ndarray) -> np.ndarray:
         """Rows of ``q`` with each bit set, per neuron (flat ``(frames, pre, bits, inner)``).
 
-        Seven bits at a time: each level's bits are spread into 9-bit fields of a uint64
-        (a 128-entry table), so one sum down the rows (at most 511 at a time: no field
-        overflows) counts seven bits at once.
+        Seven bits at a time: a level's 7-bit slice ``v`` times ``Σ_k 2^{8k}`` holds bit
+        ``k`` of copy ``k`` at bit ``9k`` (the copies do not overlap: no carries), so
+        ``(v · Σ_k 2^{8k}) & Σ_k 2^{9k}`` spreads the bits into 9-bit fields and one sum
+        down the rows (at most 511 at a time: no field overflows) counts seven bits at once.
         """
         flat = q.reshape(len(q), int(np.prod(q.shape[1:])))
         n = flat.shape[1]
         counts = np.zeros((n, self.bits), np.int64)
         step = max(1, min(_FIELD_MAX, _CHUNK_ENTRIES // max(1, n)))  # rows per chunk
-        sel = np.empty((min(len(flat), step), n), flat.dtype)  # buffers reused per chunk
-        spread = np.empty(sel.shape, np.uint64)
+        buf = np.empty((min(len(flat), step), n), np.uint64)  # reused per chunk
         for lo in range(0, self.bits, _SPREAD_BITS):
             nb = min(_SPREAD_BITS, self.bits - lo)
             for w0 in range(0, len(flat), _FIELD_MAX):  # at most 511 rows per field sum
                 total = np.zeros(n, np.uint64)
                 for r0 in range(w0, min(len(flat), w0 + _FIELD_MAX), step):
                     rows = flat[r0:min(r0 + step, w0 + _FIELD_MAX)]
-                    s, t = sel[:len(rows)], spread[:len(rows)]
-                    np.right_shift(rows, lo, out=s)
-                    np.bitwise_and(s, (1 << nb) - 1, out=s)
-                    np.take(_SPREAD, s, out=t)
-                    total += t.sum(axis=0, dtype=np.uint64)
+                    b = buf[:len(rows)]
+                    np.right_shift(rows, lo, out=b)
+                    np.bitwise_and(b, np.uint64((1 << nb) - 1), out=b)
+                    np.multiply(b, _COPIES, out=b)
+                    np.bitwise_and(b, _FIELD_BITS, out=b)
+                    total += b.sum(axis=0)
                 counts[:, lo:lo + nb] += ((total[:, None] >> _FIELDS[:nb])
                                           & np.uint64(_FIELD_MAX)).astype(np.int64)
         shape = (*q.shape[1:3], q.shape[3], self.bits)
