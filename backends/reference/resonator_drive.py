@@ -10,7 +10,10 @@ function of the repetition alone, and the closed form computes it for one bin �
 ``(steps · frames · repetitions) × n_in`` count table (a stream train's raster rows as
 they are, else one ``bincount`` of the events) times the ``n_in × n_out / K`` slice of the
 weights (float32 where every sum is a whole number below ``2**24``) — instead of the
-``K``-times larger histogram of every compartment.
+``K``-times larger histogram of every compartment.  From a stream source whose weights
+are ``2^b`` times one matrix on bit ``b`` (the motif's), the count table is never built:
+the product is the levels' own (:mod:`backends.reference.level_drive`), one per stream and
+delay however many projections split its bits.
 
 The sums are those of the step engine whenever they are exact: int64 arithmetic, or
 whole-number weights whose row sums stay below ``2**52`` (each neuron spikes at most once
