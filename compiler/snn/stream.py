@@ -106,8 +106,7 @@ class StreamCode(CheckedModel):
             np.multiply(z, np.asarray(self.gains)[:, None, None, None], out=q)
         else:
             np.copyto(q, z)
-        np.maximum(q, 0.0, out=q)  # clip to [0, x_max]
-        np.minimum(q, self.x_max, out=q)
+        np.clip(q, 0.0, self.x_max, out=q)
         np.divide(q, self.step_of_level, out=q)
         np.rint(q, out=q)
         return q.astype(np.uint16 if self.bits <= 16 else np.uint32)  # whole, below 2^bits
