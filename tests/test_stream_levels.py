@@ -120,3 +120,22 @@ def test_bit_groups_merge_only_when_disjoint_with_the_same_factor():
                                   + level_current(q, lw_high, 0, 16, 1))
     assert lw_low.merged(lw_low) is None  # overlapping bits
     assert lw_low.merged(level_weights(3 * high, None, 1, bits, inner)) is None  # another V
+
+
+@settings(max_examples=40, deadline=None)
+@given(groups=st.integers(1, 3), bits=st.integers(1, 12), m=st.integers(1, 6),
+       seed=st.integers(0, 2 ** 16))
+def test_folded_product_is_the_folded_compartment_currents(groups, bits, m, seed):
+    from backends.reference.resonator_drive import fold
+
+    rng = np.random.default_rng(seed)
+    v = rng.integers(-4, 5, (2, 4 * groups)).astype(np.float64)  # 2 columns, compartments last
+    w = np.repeat(v, bits, axis=0) * np.tile(2.0 ** np.arange(bits), 2)[:, None]
+    order = np.arange(2 * bits).reshape(bits, 2).T.reshape(-1)  # slot (c, b) → neuron (b, c)
+    lw = level_weights(w, order, 1, bits, 2)
+    assert lw is not None and lw.folded is not None
+    q = rng.integers(0, 1 << bits, (m, 1, 1, 2)).astype(np.uint16)
+    plain = level_current(q, lw, 0, m, 1).reshape(m, groups, 4)
+    folded = level_current(q, lw, 0, m, 1, folded=True).view(np.complex128)
+    np.testing.assert_array_equal(folded, fold(plain))
+    assert level_weights(w[:, :3], order, 1, bits, 2).folded is None  # not in fours

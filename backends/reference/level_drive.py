@@ -35,15 +35,15 @@ import numpy as np
 
 __all__ = ["LevelWeights", "level_weights", "level_current"]
 
-#: Masked levels (float64 entries) of one product (steps are cut into blocks below it).
-_LEVEL_ENTRIES = 1 << 20
+#: Masked levels of one product (steps are cut into blocks below it: 1 MiB as float64).
+_LEVEL_ENTRIES = 1 << 17
 
 
 class LevelWeights:
     """The factored weights of one delay class: the level column ``cols[rep, c]`` of each
     repetition, the bits ``mask[c]`` it sends and ``weights`` ``V`` (``C × n_out``)."""
 
-    __slots__ = ("cols", "mask", "weights", "bits", "full", "identity", "key")
+    __slots__ = ("cols", "mask", "weights", "bits", "full", "identity", "key", "folded")
 
     def __init__(self, cols: np.ndarray, mask: np.ndarray, weights: np.ndarray,
                  bits: int) -> None:
@@ -54,6 +54,10 @@ class LevelWeights:
         self.identity = bool(np.array_equal(cols.reshape(-1), np.arange(cols.size)))
         #: Equal for weights that differ in their masks alone (:meth:`merged`).
         self.key = (cols.shape, weights.shape, bits, cols.tobytes(), weights.tobytes())
+        #: ``V`` folded over trailing compartments ``(I_0 − I_1) + i(I_2 − I_3)``, as
+        #: interleaved (real, imaginary) columns: the product is the complex drive itself.
+        #: None unless whole sums below ``2^52`` (or the columns are not in fours).
+        self.folded = _folded(weights, bits)
 
     def merged(self, other: LevelWeights) -> LevelWeights | None:
         """One factorisation sending the bits of both (same columns and ``V``, disjoint
@@ -102,13 +106,25 @@ def level_weights(weights: np.ndarray, order: np.ndarray | None, n_reps: int, bi
     return LevelWeights(cols, mask, v, bits) if exact else None
 
 
+def _folded(v: np.ndarray, bits: int) -> np.ndarray | None:
+    if v.shape[1] % 4:
+        return None
+    parts = v.reshape(v.shape[0], -1, 4)
+    folded = np.stack([parts[..., 0] - parts[..., 1], parts[..., 2] - parts[..., 3]],
+                      axis=-1).reshape(v.shape[0], -1)
+    exact = ((1 << bits) - 1) * np.abs(folded).sum(axis=0).max(initial=0.0) < 2.0 ** 52
+    return folded if exact else None
+
+
 def level_current(levels: np.ndarray, lw: LevelWeights, r0: int, r1: int,
-                  n_frames: int) -> np.ndarray:
+                  n_frames: int, folded: bool = False) -> np.ndarray:
     """The current ``(steps · frames · repetitions, n_out)`` of level rows ``[r0, r1)``
-    (``levels``: ``(rows, frames, pre, inner)``) through ``lw``, float64."""
+    (``levels``: ``(rows, frames, pre, inner)``) through ``lw``, float64; ``folded``: through
+    :attr:`LevelWeights.folded` (``n_out / 4`` complex columns as float pairs)."""
     m = r1 - r0
     n_reps, n_cols = lw.cols.shape
-    out = np.empty((m * n_frames * n_reps, lw.weights.shape[1]))
+    weights = lw.folded if folded else lw.weights
+    out = np.empty((m * n_frames * n_reps, weights.shape[1]))
     chunk = max(1, _LEVEL_ENTRIES // max(1, n_frames * lw.cols.size))
     per_row = n_frames * n_reps
     for a in range(r0, r1, chunk):
@@ -120,6 +136,6 @@ def level_current(levels: np.ndarray, lw: LevelWeights, r0: int, r1: int,
             picked = np.take(q, lw.cols.reshape(-1), axis=2).reshape(-1, n_cols)
         if not lw.full:
             picked = picked & lw.mask.astype(picked.dtype)
-        np.matmul(picked.astype(np.float64), lw.weights,
+        np.matmul(picked.astype(np.float64), weights,
                   out=out[(a - r0) * per_row:(b - r0) * per_row])
     return out

@@ -163,13 +163,22 @@ def shared_drive(plan: SimPlan, pid: str, arrivals: list, n_frames: int, s0: int
         return None
     dims = tuple(1 if a == axis else s for a, s in zip(pop.axes, pop.dims, strict=True))
     n_t = s1 - s0
-    total = np.zeros((n_t * n_frames, *dims))
+    out = np.zeros((n_t * n_frames, *dims[:-1]), np.complex128)  # folded contributions
+    total = None  # compartment currents of the others, folded at the end
     for red, arr, lw in _merge_levels(reduced):
+        if (lw is not None and lw.folded is not None and red.block[-1] == N_COMPARTMENTS
+                and red.to_target[-1] == len(red.block) - 1):  # compartments last
+            _add_level_drive(out, red, lw, arr, n_frames, s0, s1, folded=True)
+            continue
+        if total is None:
+            total = np.zeros((n_t * n_frames, *dims))
         if lw is not None:
             _add_level_drive(total, red, lw, arr, n_frames, s0, s1)
         else:
             _add_drive(total, red, arr, n_frames, s0, s1)
-    return fold(total.reshape(n_t, n_frames, *dims[:-1], N_COMPARTMENTS))
+    if total is not None:  # whole sums: (ΣI_0 − ΣI_1) is Σ(I_0 − I_1), exactly
+        out += fold(total)
+    return out.reshape(n_t, n_frames, *dims[:-1])
 
 
 def _merge_levels(reduced: list) -> list:
@@ -224,18 +233,22 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
 
 
 def _add_level_drive(total: np.ndarray, red: SharedWeights, lw, arr, n_frames: int, s0: int,
-                     s1: int) -> None:
+                     s1: int, folded: bool = False) -> None:
     """:func:`_add_drive` from a stream train's levels (:mod:`backends.reference.level_drive`;
-    arrivals at ``n_steps`` or later cut, as for the raster)."""
+    arrivals at ``n_steps`` or later cut, as for the raster); ``folded``: ``total`` is the
+    complex drive (no compartment axis) and the product is folded already."""
     stream = arr.fired.stream
     first = stream.start + arr.delay  # the arrival step of level row 0
     lo, hi = max(s0, first), min(s1, first + len(stream.levels), arr.n_steps)
     if lo >= hi:
         return
-    current = level_current(stream.levels, lw, lo - first, hi - first, n_frames)
-    current = current.reshape((hi - lo) * n_frames, *red.block)
+    current = level_current(stream.levels, lw, lo - first, hi - first, n_frames, folded)
+    block, order = red.block, red.to_target
+    if folded:
+        current, block, order = current.view(np.complex128), block[:-1], order[:-1]
+    current = current.reshape((hi - lo) * n_frames, *block)
     total[(lo - s0) * n_frames:(hi - s0) * n_frames] += current.transpose(
-        0, *(1 + a for a in red.to_target))
+        0, *(1 + a for a in order))
 
 
 def _add_raster_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,
