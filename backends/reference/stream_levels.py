@@ -88,8 +88,12 @@ class StreamLevels:
                 for r0 in range(w0, min(len(flat), w0 + _FIELD_MAX), step):
                     rows = flat[r0:min(r0 + step, w0 + _FIELD_MAX)]
                     b = buf[:len(rows)]
-                    np.right_shift(rows, lo, out=b)
-                    np.bitwise_and(b, np.uint64((1 << nb) - 1), out=b)
+                    if lo == 0:  # the low slice: one masking pass
+                        np.bitwise_and(rows, (1 << nb) - 1, out=b)
+                    else:
+                        np.right_shift(rows, lo, out=b)
+                        if lo + nb < self.bits:  # bits above the slice (levels < 2^bits)
+                            np.bitwise_and(b, np.uint64((1 << nb) - 1), out=b)
                     np.multiply(b, _COPIES, out=b)
                     np.bitwise_and(b, _FIELD_BITS, out=b)
                     total += b.sum(axis=0)
