@@ -106,7 +106,10 @@ def run_closed(
         fired, n = spikes[pid], n_frames * pop.size
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
-            counts[pid] = fired.fired_mask.astype(np.int64).reshape(n_frames, -1)
+            spans = getattr(plan.neurons.get(pid), "spans", None)
+            counts[pid] = (np.zeros((n_frames, pop.size), np.int64)  # never spiking: none
+                           if spans is not None and not any(s.spiking_on for s in spans)
+                           else fired.fired_mask.astype(np.int64).reshape(n_frames, -1))
         elif fired.has_raster:  # stream trains: bit planes or levels, no event lists
             counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
             first[pid] = fired.first_steps()
