@@ -39,12 +39,41 @@ def test_counts_and_first_steps_are_those_of_the_bit_planes(m, f, pre, inner, bi
     np.testing.assert_array_equal(s.first_steps(), first)
 
 
+
+@settings(max_examples=80, deadline=None)
+@given(m=st.integers(0, 300), f=st.integers(1, 3), pre=st.integers(1, 3),
+       inner=st.integers(1, 4), bits=st.integers(1, 24), start=st.integers(0, 3),
+       uniform=st.booleans(), seed=st.integers(0, 2 ** 16))
+def test_column_counts_and_synaptic_events_are_those_of_the_bit_planes(m, f, pre, inner, bits,
+                                                                       start, uniform, seed):
+    rng = np.random.default_rng(seed)
+    q = rng.integers(0, 1 << bits, (m, f, pre, inner))
+    q[rng.random(q.shape) < 0.3] = 0
+    q = q.astype(np.uint16 if bits <= 16 else np.uint32)
+    s = StreamLevels(q, bits, start)
+    rows = s.raster()[0]
+    # synapses per neuron of one frame, (pre, bit, inner): one count per column, or per neuron
+    per = rng.integers(0, 50, (pre, 1 if uniform else bits, inner))
+    per = np.broadcast_to(per, (pre, bits, inner)).reshape(-1)
+    for stop in (0, start, start + m // 2, start + m + 2):
+        spiked = rows[:max(0, stop - start)].sum(axis=0).reshape(f, pre, bits, inner)
+        np.testing.assert_array_equal(s.column_counts(stop), spiked.sum(axis=2))
+        want = int(spiked.sum(axis=0).reshape(-1) @ per)
+        got = s.synaptic_events(stop, per)
+        if uniform:
+            assert got == want
+        else:  # bit-varying synapse counts (unless drawn equal): per-neuron counts asked for
+            assert got is None or got == want
+
 def test_hand_worked_levels():
     # levels 5 (101b), 2 (010b), 4 (100b) of one neuron column, 3 bits, from step 2
     s = StreamLevels(np.array([5, 2, 4], np.uint16).reshape(3, 1, 1, 1), 3, 2)
     assert s.counts_before(3).tolist() == [1, 0, 1]
     assert s.counts_before(10).tolist() == [1, 1, 2]
     assert s.first_steps().tolist() == [2, 3, 2]
+    assert s.column_counts(10).tolist() == [[[4]]]  # 2 + 1 + 1 set bits
+    assert s.synaptic_events(10, np.array([2, 2, 2])) == 8
+    assert s.synaptic_events(10, np.array([1, 2, 3])) is None
 
 
 def test_stream_code_levels_are_the_rows_of_the_bit_planes():

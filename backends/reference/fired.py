@@ -118,6 +118,17 @@ class Fired:
                                                   axis=0).astype(np.int64)
         return self._counts[stop]
 
+    def synaptic_events(self, stop: int, per_source: np.ndarray) -> int:
+        """Spikes before ``stop`` × the synapses each reaches (``per_source``, per neuron of
+        one frame), summed (a raster or levels only; levels: by column popcounts when
+        every bit neuron of a column reaches as many synapses)."""
+        if self.stream is not None:
+            events = self.stream.synaptic_events(stop, per_source)
+            if events is not None:
+                return events
+        spiked = self.counts_before(stop).reshape(-1, per_source.size)
+        return int(spiked.sum(axis=0) @ per_source)
+
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none (a raster or levels only)."""
         if self.stream is not None:

@@ -19,7 +19,7 @@ from backends.reference.guards import (
 from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan
 from backends.reference.plan_cache import cached_plan, peek_plan
-from backends.reference.result import Activity, SimResult
+from backends.reference.result import Activity, LazyArrays, SimResult
 from backends.reference.run_options import ENGINE_MODES, RunOptions
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
@@ -202,10 +202,11 @@ def simulate(
     pops = network.population
     return SimResult(
         outputs=decode_outputs(network, act, framed),
-        spike_counts={pid: int(c.sum()) for pid, c in act.counts.items()},
+        spike_counts=act.spike_totals(),
         synaptic_events=dict(act.synaptic_events),
-        first_spike_steps={pid: f.reshape(n_frames, *pops[pid].dims)
-                           for pid, f in act.first_spike.items()},
+        first_spike_steps=LazyArrays({  # reshaped when read (a source's may be lazy)
+            pid: (lambda pid=pid: act.first_spike[pid].reshape(n_frames, *pops[pid].dims))
+            for pid in act.first_spike}),
         spikes=None if act.rasters is None else {
             pid: r.reshape(n_frames, network.n_steps, *pops[pid].dims)
             for pid, r in act.rasters.items()},

@@ -8,6 +8,9 @@ neurons: neuron ``(frame, pre, b, inner)`` spikes at step ``start + n`` iff bit 
 boolean raster:
 
 * spikes per neuron before a step: the count of rows ``n`` with bit ``b`` of ``q_n`` set;
+* spikes per level column (all its bit neurons) before a step: the set bits of its levels,
+  ``Σ_n popcount(q_n)`` — one pass, enough for spike totals and for synaptic events when
+  every bit neuron of a column reaches as many synapses;
 * first spike step: with ``s_n = q_0 | … | q_n`` (an OR-accumulation down the rows), bit
   ``b`` is first set at row ``m − #\{n : b ∈ s_n\}`` of the ``m`` rows (the rows before it
   lack the bit, every row from it on has it), ``−1`` if never;
@@ -23,6 +26,8 @@ Two samples of one neuron column with 2 bits: levels 2 then 3.
 [[0, 1], [1, 1]]
 >>> s.counts_before(2).tolist(), s.counts_before(9).tolist(), s.first_steps().tolist()
 ([0, 1], [1, 2], [2, 1])
+>>> int(s.column_counts(9).sum()), s.synaptic_events(9, np.array([3, 3]))
+(3, 9)
 """
 
 from __future__ import annotations
@@ -45,11 +50,12 @@ class StreamLevels:
     ``n`` is sent at step ``start + n`` as ``bits`` bit neurons per level (see the module
     docstring); neurons are ordered ``(frames, pre, bits, inner)``."""
 
-    __slots__ = ("levels", "bits", "start", "_raster")
+    __slots__ = ("levels", "bits", "start", "_raster", "_columns")
 
     def __init__(self, levels: np.ndarray, bits: int, start: int) -> None:
         self.levels, self.bits, self.start = levels, bits, start
         self._raster: np.ndarray | None = None
+        self._columns: dict[int, np.ndarray] = {}
 
     @property
     def inner(self) -> int:
@@ -105,6 +111,23 @@ class StreamLevels:
     def counts_before(self, stop: int) -> np.ndarray:
         """Spikes per neuron at steps below ``stop`` (int64)."""
         return self._bit_counts(self.levels[:max(0, stop - self.start)])
+
+    def column_counts(self, stop: int) -> np.ndarray:
+        """Spikes per level column ``(frames, pre, inner)`` at steps below ``stop``: the set
+        bits of its levels (int64; kept per ``stop``)."""
+        if stop not in self._columns:
+            rows = self.levels[:max(0, stop - self.start)]
+            self._columns[stop] = np.bitwise_count(rows).sum(axis=0, dtype=np.int64)
+        return self._columns[stop]
+
+    def synaptic_events(self, stop: int, per_source: np.ndarray) -> int | None:
+        """``Σ`` spikes before ``stop`` × ``per_source`` (synapses per neuron of one frame,
+        ``(pre, bits, inner)`` order) from the column counts when ``per_source`` does not
+        vary with the bit, else None (ask the per-neuron counts)."""
+        per = per_source.reshape(self.levels.shape[2], self.bits, self.inner)
+        if not np.array_equal(per, np.broadcast_to(per[:, :1], per.shape)):
+            return None
+        return int(np.sum(self.column_counts(stop).sum(axis=0) * per[:, 0]))
 
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none."""
