@@ -8,9 +8,9 @@ neurons: neuron ``(frame, pre, b, inner)`` spikes at step ``start + n`` iff bit 
 boolean raster:
 
 * spikes per neuron before a step: the count of rows ``n`` with bit ``b`` of ``q_n`` set;
-* spikes per level column (all its bit neurons) before a step: the set bits of its levels,
-  ``Σ_n popcount(q_n)`` — one pass, enough for spike totals and for synaptic events when
-  every bit neuron of a column reaches as many synapses;
+* spikes per level column of the bit neurons in a mask ``M`` before a step: the set bits
+  ``Σ_n popcount(q_n & M)`` — one pass, enough for spike totals and for synaptic events when
+  the bits of ``M`` reach as many synapses from each column;
 * first spike step: with ``s_n = q_0 | … | q_n`` (an OR-accumulation down the rows), bit
   ``b`` is first set at row ``m − #\{n : b ∈ s_n\}`` of the ``m`` rows (the rows before it
   lack the bit, every row from it on has it), ``−1`` if never;
@@ -26,8 +26,8 @@ Two samples of one neuron column with 2 bits: levels 2 then 3.
 [[0, 1], [1, 1]]
 >>> s.counts_before(2).tolist(), s.counts_before(9).tolist(), s.first_steps().tolist()
 ([0, 1], [1, 2], [2, 1])
->>> int(s.column_counts(9).sum()), s.synaptic_events(9, np.array([3, 3]))
-(3, 9)
+>>> int(s.column_counts(9).sum()), s.synaptic_events(9, np.array([3, 5]))
+(3, 13)
 """
 
 from __future__ import annotations
@@ -42,6 +42,8 @@ _SPREAD_BITS, _FIELD_MAX = 7, 511
 _CHUNK_ENTRIES = 1 << 16
 _FIELDS = np.arange(_SPREAD_BITS, dtype=np.uint64) * np.uint64(9)
 #: ``Σ_k 2^{8k}`` (seven copies of a 7-bit slice) and ``Σ_k 2^{9k}`` (bit ``k`` of copy ``k``).
+#: Distinct per-bit synapse profiles counted by masked popcounts before falling back.
+_MAX_PROFILES = 4
 _COPIES = np.uint64(sum(1 << (8 * k) for k in range(_SPREAD_BITS)))
 _FIELD_BITS = np.uint64(sum(1 << (9 * k) for k in range(_SPREAD_BITS)))
 
@@ -112,22 +114,40 @@ class StreamLevels:
         """Spikes per neuron at steps below ``stop`` (int64)."""
         return self._bit_counts(self.levels[:max(0, stop - self.start)])
 
-    def column_counts(self, stop: int) -> np.ndarray:
-        """Spikes per level column ``(frames, pre, inner)`` at steps below ``stop``: the set
-        bits of its levels (int64; kept per ``stop``)."""
-        if stop not in self._columns:
+    def column_counts(self, stop: int, mask: int | None = None) -> np.ndarray:
+        """Spikes per level column ``(frames, pre, inner)`` at steps below ``stop`` of the bit
+        neurons in ``mask`` (None: all): the set bits of its levels (int64; kept)."""
+        if (stop, mask) not in self._columns:
             rows = self.levels[:max(0, stop - self.start)]
-            self._columns[stop] = np.bitwise_count(rows).sum(axis=0, dtype=np.int64)
-        return self._columns[stop]
+            if mask is not None:
+                rows = np.bitwise_and(rows, rows.dtype.type(mask))
+            self._columns[stop, mask] = np.bitwise_count(rows).sum(axis=0, dtype=np.int64)
+        return self._columns[stop, mask]
 
     def synaptic_events(self, stop: int, per_source: np.ndarray) -> int | None:
         """``Σ`` spikes before ``stop`` × ``per_source`` (synapses per neuron of one frame,
-        ``(pre, bits, inner)`` order) from the column counts when ``per_source`` does not
-        vary with the bit, else None (ask the per-neuron counts)."""
+        ``(pre, bits, inner)`` order), or None (ask the per-neuron counts) when the bits'
+        synapse counts take more than :data:`_MAX_PROFILES` distinct ``(pre, inner)`` profiles.
+
+        Bits with one profile ``g`` (e.g. the low bits of a projection split by weight range)
+        count together: their events are ``Σ g · column_counts(stop, mask)``.
+        """
         per = per_source.reshape(self.levels.shape[2], self.bits, self.inner)
-        if not np.array_equal(per, np.broadcast_to(per[:, :1], per.shape)):
-            return None
-        return int(np.sum(self.column_counts(stop).sum(axis=0) * per[:, 0]))
+        groups: list[tuple[np.ndarray, int]] = []  # (profile, bit mask)
+        for b in range(self.bits):
+            profile = per[:, b]
+            if not profile.any():
+                continue
+            k = next((i for i, (g, _) in enumerate(groups) if np.array_equal(g, profile)), None)
+            if k is None and len(groups) == _MAX_PROFILES:
+                return None
+            if k is None:
+                groups.append((profile, 1 << b))
+            else:
+                groups[k] = (profile, groups[k][1] | 1 << b)
+        full = (1 << self.bits) - 1
+        return sum(int(np.sum(self.column_counts(stop, None if m == full else m).sum(axis=0)
+                              * g)) for g, m in groups)
 
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none."""
