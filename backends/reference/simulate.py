@@ -225,5 +225,7 @@ def _overflow(plan, act) -> dict[str, int]:
     limit = plan.state_limit
     if limit is None or act.overflow:
         return dict(act.overflow)
-    return {pid: n for pid, v in act.membrane.items()
-            if (n := int(np.count_nonzero(np.abs(v) > limit)))}
+    return {pid: n for pid, v in act.membrane.items()  # counted only past the extremes
+            if v.size and (np.fmax.reduce(v, axis=None) > limit  # (fmax, fmin: NaN skipped)
+                           or np.fmin.reduce(v, axis=None) < -limit)
+            and (n := int(np.count_nonzero(np.abs(v) > limit)))}

@@ -91,4 +91,14 @@ def combine_parts(y: np.ndarray, combine: PartLayout) -> np.ndarray:
         return y[..., 0] + 1j * y[..., 1]
     if combine == "signed":
         return y[..., 0] - y[..., 1]
-    return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
+    if y.dtype != np.float64:
+        return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
+    # a + 1j·b written into one complex array, the same floats: 1j·b is (0·b − 0) + (0 + b)j
+    # and adding a gives (a + 0·b) + (0 + b)j (0·b: a zero of b's sign, NaN for b = ±inf)
+    out = np.empty(y.shape[:-1], np.complex128)
+    re, im = out.real, out.imag
+    np.subtract(y[..., 0], y[..., 1], out=re)
+    np.subtract(y[..., 2], y[..., 3], out=im)
+    np.add(re, np.multiply(im, 0.0), out=re)
+    np.add(im, 0.0, out=im)
+    return out
