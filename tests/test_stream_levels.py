@@ -75,6 +75,13 @@ def test_column_counts_and_synaptic_events_are_those_of_the_bit_planes(m, f, pre
             assert got == want
         else:  # more distinct profiles: the per-neuron counts are asked for
             assert got is None
+        # the total: from masked counts that split the bits, or one pass
+        assert s.total(stop) == int(spiked.sum())
+    low = (1 << int(rng.integers(0, bits + 1))) - 1  # a split of the bits into two masks
+    for part in (low, ((1 << bits) - 1) & ~low):
+        if part:
+            s.column_counts(start + m + 7, part)
+    assert s.total(start + m + 7) == int(rows.sum())
 
 def test_hand_worked_levels():
     # levels 5 (101b), 2 (010b), 4 (100b) of one neuron column, 3 bits, from step 2
@@ -86,6 +93,8 @@ def test_hand_worked_levels():
     assert s.synaptic_events(10, np.array([2, 2, 2])) == 8
     assert s.synaptic_events(10, np.array([1, 0, 3])) == 1 * 1 + 3 * 2  # bits 0 and 2
     assert s.column_counts(10, 0b101).tolist() == [[[3]]]
+    assert s.column_counts(10, 0b010).tolist() == [[[1]]]
+    assert s.total(10) == 4  # from the two masked counts (they split the 3 bits)
 
 
 def test_stream_code_levels_are_the_rows_of_the_bit_planes():

@@ -116,7 +116,7 @@ def run_closed(
                            if spans is not None and not any(s.spiking_on for s in spans)
                            else fired.fired_mask.astype(np.int64).reshape(n_frames, -1))
         elif fired.stream is not None:  # stream levels: the total now, per neuron on demand
-            totals[pid] = int(fired.stream.column_counts(n_steps).sum())
+            totals[pid] = fired.stream.total(n_steps)
             counts[pid] = lambda f=fired, n=n_frames: f.counts_before(f.n_steps).reshape(n, -1)
             first[pid] = lambda f=fired, n=n_frames: f.first_steps().reshape(n, -1)
             continue

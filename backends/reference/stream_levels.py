@@ -26,8 +26,8 @@ Two samples of one neuron column with 2 bits: levels 2 then 3.
 [[0, 1], [1, 1]]
 >>> s.counts_before(2).tolist(), s.counts_before(9).tolist(), s.first_steps().tolist()
 ([0, 1], [1, 2], [2, 1])
->>> int(s.column_counts(9).sum()), s.synaptic_events(9, np.array([3, 5]))
-(3, 13)
+>>> s.total(9), s.synaptic_events(9, np.array([3, 5])), s.total(9)
+(3, 13, 3)
 """
 
 from __future__ import annotations
@@ -121,8 +121,22 @@ class StreamLevels:
             rows = self.levels[:max(0, stop - self.start)]
             if mask is not None:
                 rows = np.bitwise_and(rows, rows.dtype.type(mask))
-            self._columns[stop, mask] = np.bitwise_count(rows).sum(axis=0, dtype=np.int64)
+            most = len(rows) * self.bits  # the largest sum: accumulate in the narrowest type
+            acc = np.uint16 if most < 1 << 16 else np.uint32 if most < 1 << 32 else np.uint64
+            self._columns[stop, mask] = np.bitwise_count(rows).sum(
+                axis=0, dtype=acc).astype(np.int64)
         return self._columns[stop, mask]
+
+    def total(self, stop: int) -> int:
+        """Spikes of every neuron at steps below ``stop``: the sum of the masked column
+        counts already taken when their masks split the bits, else one popcount pass."""
+        masks = [m for (s, m) in self._columns if s == stop and m is not None]
+        union = 0
+        for m in masks:
+            union = union | m if not union & m else -1
+        if union == (1 << self.bits) - 1:
+            return sum(int(self._columns[stop, m].sum()) for m in masks)
+        return int(self.column_counts(stop).sum())
 
     def synaptic_events(self, stop: int, per_source: np.ndarray) -> int | None:
         """``Σ`` spikes before ``stop`` × ``per_source`` (synapses per neuron of one frame,
