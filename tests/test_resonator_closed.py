@@ -286,3 +286,19 @@ def test_exact_bound_refuses_a_fractional_drive_unless_told_it_is_whole():
     assert _exact(z, np.ones((1, 1, 1, 1), complex), a, None, 12)
     big = np.full((1, 1, 1, 1), 2.0 ** 40 + 0j)  # 2^(F+1)·|z + d| reaches 2^52
     assert not _exact(z, big, a, None, 12, whole=True)
+
+
+@settings(max_examples=60, deadline=None)
+@given(shape=st.lists(st.integers(1, 4), min_size=3, max_size=3), seed=st.integers(0, 2 ** 16),
+       integer=st.booleans())
+def test_compartments_are_re_minus_re_im_minus_im(shape, seed, integer):
+    from backends.reference.resonator_closed import _project
+    rng = np.random.default_rng(seed)
+    z = np.empty(shape, np.complex128)
+    z.real, z.imag = (rng.choice([0.0, -0.0, 1.0, -7.0, 2.0 ** 40], shape) for _ in range(2))
+    dt = np.int64 if integer else np.float64
+    want = np.empty((*shape, 4), dt)
+    want[..., 0], want[..., 2] = z.real, z.imag
+    want[..., 1], want[..., 3] = -want[..., 0], -want[..., 2]
+    got = _project(z, dt)
+    assert got.dtype == dt and got.tobytes() == want.reshape(-1).tobytes()

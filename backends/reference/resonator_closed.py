@@ -281,9 +281,8 @@ def _replay_steps(z, d, s0, params, coefs):
 
 def _project(z: np.ndarray, dtype) -> np.ndarray:
     """Compartment membranes ``(Re, −Re, Im, −Im)`` per resonator, flat."""
-    out = np.empty((*z.shape, N_COMPARTMENTS), dtype)
-    out[..., 0] = z.real
-    out[..., 2] = z.imag
+    out = np.empty((*z.shape, 2, 2), dtype)  # (Re, Im) × (+, −): the compartments' order
+    pairs = np.ascontiguousarray(z).reshape(-1).view(np.float64).reshape(*z.shape, 2)
+    np.copyto(out[..., 0], pairs, casting="unsafe")  # (whole values: exact in int64)
     np.negative(out[..., 0], out=out[..., 1])
-    np.negative(out[..., 2], out=out[..., 3])
     return out.reshape(-1)
