@@ -146,22 +146,18 @@ class StreamLevels:
         Bits with one profile ``g`` (e.g. the low bits of a projection split by weight range)
         count together: their events are ``Σ g · column_counts(stop, mask)``.
         """
-        per = per_source.reshape(self.levels.shape[2], self.bits, self.inner)
-        groups: list[tuple[np.ndarray, int]] = []  # (profile, bit mask)
-        for b in range(self.bits):
-            profile = per[:, b]
-            if not profile.any():
-                continue
-            k = next((i for i, (g, _) in enumerate(groups) if np.array_equal(g, profile)), None)
-            if k is None and len(groups) == _MAX_PROFILES:
+        per = np.ascontiguousarray(np.moveaxis(
+            per_source.reshape(self.levels.shape[2], self.bits, self.inner), 1, 0))
+        live = per.reshape(self.bits, -1).any(axis=1)
+        groups: dict[bytes, list] = {}  # profile bytes → [profile, bit mask]
+        for b in np.flatnonzero(live).tolist():
+            group = groups.setdefault(per[b].tobytes(), [per[b], 0])
+            group[1] |= 1 << b
+            if len(groups) > _MAX_PROFILES:
                 return None
-            if k is None:
-                groups.append((profile, 1 << b))
-            else:
-                groups[k] = (profile, groups[k][1] | 1 << b)
         full = (1 << self.bits) - 1
         return sum(int(np.sum(self.column_counts(stop, None if m == full else m).sum(axis=0)
-                              * g)) for g, m in groups)
+                              * g)) for g, m in groups.values())
 
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none."""
