@@ -146,18 +146,12 @@ class StreamLevels:
         Bits with one profile ``g`` (e.g. the low bits of a projection split by weight range)
         count together: their events are ``Σ g · column_counts(stop, mask)``.
         """
-        per = np.ascontiguousarray(np.moveaxis(
-            per_source.reshape(self.levels.shape[2], self.bits, self.inner), 1, 0))
-        live = per.reshape(self.bits, -1).any(axis=1)
-        groups: dict[bytes, list] = {}  # profile bytes → [profile, bit mask]
-        for b in np.flatnonzero(live).tolist():
-            group = groups.setdefault(per[b].tobytes(), [per[b], 0])
-            group[1] |= 1 << b
-            if len(groups) > _MAX_PROFILES:
-                return None
+        groups = _profiles(per_source, self.levels.shape[2], self.bits, self.inner)
+        if groups is None:
+            return None
         full = (1 << self.bits) - 1
         return sum(int(np.sum(self.column_counts(stop, None if m == full else m).sum(axis=0)
-                              * g)) for g, m in groups.values())
+                              * g)) for g, m in groups)
 
     def first_steps(self) -> np.ndarray:
         """First spike step per neuron, ``-1``: none."""
@@ -166,3 +160,31 @@ class StreamLevels:
             np.bitwise_or(seen[r - 1], row, out=seen[r]) if r else np.copyto(seen[0], row)
         count = self._bit_counts(seen)
         return np.where(count > 0, self.start + len(seen) - count, -1)
+
+
+#: The latest groupings of :func:`_profiles`, by the identity of the synapse counts (kept
+#: with them: a delivery's counts are one array for every frame).
+_PROFILES: dict[tuple[int, int, int, int], tuple[np.ndarray, tuple | None]] = {}
+
+
+def _profiles(per_source: np.ndarray, pre: int, bits: int,
+              inner: int) -> tuple[tuple[np.ndarray, int], ...] | None:
+    """``((profile, bit mask), …)``: the bits of ``per_source`` (``(pre, bits, inner)``)
+    grouped by their ``(pre, inner)`` synapse counts, all-zero bits left out; None past
+    :data:`_MAX_PROFILES` groups."""
+    key = (id(per_source), pre, bits, inner)
+    kept = _PROFILES.get(key)
+    if kept is not None and kept[0] is per_source:
+        return kept[1]
+    per = np.ascontiguousarray(np.moveaxis(per_source.reshape(pre, bits, inner), 1, 0))
+    live = per.reshape(bits, -1).any(axis=1)
+    groups: dict[bytes, list] = {}  # profile bytes → [profile, bit mask]
+    for b in np.flatnonzero(live).tolist():
+        group = groups.setdefault(per[b].tobytes(), [per[b], 0])
+        group[1] |= 1 << b
+    out = (None if len(groups) > _MAX_PROFILES
+           else tuple((g, m) for g, m in groups.values()))
+    if len(_PROFILES) >= 32:
+        _PROFILES.clear()
+    _PROFILES[key] = (per_source, out)
+    return out
