@@ -98,10 +98,10 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
     (lead, k, tail), coefs = input_layout(plan, pid)
     shape = (n_frames * lead, k, tail)
     z = np.zeros(shape, np.complex128)
-    v = np.zeros(n, dtype)
+    v = None  # (the compartments of z once an input span ran)
     for seg in params.spans:
         if not seg.input_on:
-            _, v = charge(v, first, seg, params)
+            _, v = charge(np.zeros(n, dtype) if v is None else v, first, seg, params)
             continue
         shared = shared_drive(plan, pid, arrivals, n_frames, seg.start, seg.stop)
         blocks = ([(seg.start, shared.reshape(-1, shape[0], 1, tail))]
@@ -110,7 +110,7 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
             z = (_linear(z, d, coefs[0]) if not params.coef_bits
                  else _replay(z, d, s0, params, coefs, whole=shared is not None))
         v = _project(z, dtype)
-    return v
+    return np.zeros(n, dtype) if v is None else v
 
 
 def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
