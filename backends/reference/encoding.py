@@ -154,7 +154,12 @@ class StreamTrain:
     @classmethod
     def build(cls, code: StreamCode, values: np.ndarray, n_steps: int) -> StreamTrain:
         """Levels of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
-        levels = code.level_rows(values)[:max(0, n_steps - code.start_step)]
+        return cls.of_levels(code, code.level_rows(values), n_steps)
+
+    @classmethod
+    def of_levels(cls, code: StreamCode, levels: np.ndarray, n_steps: int) -> StreamTrain:
+        """The train of ``code``'s level rows ``levels``, cut at ``n_steps``."""
+        levels = levels[:max(0, n_steps - code.start_step)]
         return cls(StreamLevels(levels, code.bits, code.start_step))
 
     @property
@@ -295,6 +300,9 @@ def encode_inputs(
     for port, enc in ports.items():
         x = arrays[port] if n is not None else arrays[port][None]
         x = normalize_values(x, _normalize_axes(network, enc))
+        if (train := _signed_stream(enc, x, trains, network.n_steps)) is not None:
+            out[enc.population] = train
+            continue
         parts = split_values(x, enc.split)
         count = check_range(port, enc.code, parts, n_parts=N_PARTS[enc.split],
                             n_steps=network.n_steps, framed=n is not None,
@@ -305,6 +313,22 @@ def encode_inputs(
         parts = parts.reshape(n_frames, -1)
         out[enc.population] = trains[enc.code.type](enc.code, parts, network.n_steps)
     return out, n_frames, n is not None
+
+
+def _signed_stream(enc, x: np.ndarray, trains: Mapping, n_steps: int) -> StreamTrain | None:
+    """The stream train of complex ``x`` straight from its components
+    (:meth:`~compiler.snn.stream.StreamCode.signed_level_rows`) when no part is above the
+    code's bound; None otherwise (out of range: the policy's path with the parts)."""
+    code = enc.code
+    if (enc.split != "re_im_signed" or code.type != "stream" or x.dtype != np.complex128
+            or trains.get("stream") != StreamTrain.build or not x.size):
+        return None
+    x = np.ascontiguousarray(x)  # (a host op's output may be a strided view)
+    comps = x.reshape(-1).view(np.float64)
+    if max(comps.max(), -comps.min()) > code.bound():
+        return None
+    levels = code.signed_level_rows(x)
+    return None if levels is None else StreamTrain.of_levels(code, levels, n_steps)
 
 
 def _normalize_axes(network: SpikingNetwork, enc) -> tuple[int, ...]:
