@@ -115,7 +115,7 @@ def check_decoders(network: SpikingNetwork) -> None:
         if dec.gain_axis == PART_AXIS:
             raise NetworkError(f"decoder {dec.port!r}: gains run along a value axis, not "
                                f"{PART_AXIS!r}", node=dec.port)
-        dec.neuron_gains(pop.shape)
+        _neuron_gains(dec, tuple(pop.shape.items()))  # (checked once, kept for decoding)
 
 
 def decode_outputs(
