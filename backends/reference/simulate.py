@@ -204,8 +204,10 @@ def simulate(
         outputs=decode_outputs(network, act, framed),
         spike_counts=act.spike_totals(),
         synaptic_events=dict(act.synaptic_events),
-        first_spike_steps=LazyArrays({  # reshaped when read (a source's may be lazy)
-            pid: (lambda pid=pid: act.first_spike[pid].reshape(n_frames, *pops[pid].dims))
+        first_spike_steps=LazyArrays({  # reshaped when read (a source's may be lazy; the
+            # closures hold the first spikes only, not the rest of the activity)
+            pid: (lambda pid=pid, first=act.first_spike, dims=pops[pid].dims:
+                  first[pid].reshape(n_frames, *dims))
             for pid in act.first_spike}),
         spikes=None if act.rasters is None else {
             pid: r.reshape(n_frames, network.n_steps, *pops[pid].dims)
