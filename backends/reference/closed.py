@@ -33,7 +33,7 @@ from backends.reference.order import first_spike_steps
 from backends.reference.plan import SimPlan, closed_form_problems
 from backends.reference.resonator import ResonatorStepParams
 from backends.reference.resonator_closed import solve_resonators
-from backends.reference.result import Activity
+from backends.reference.result import Activity, LazyArrays
 from backends.reference.spans import Arrivals, charge, driven, silent
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
@@ -101,13 +101,26 @@ def run_closed(
             spikes[pid] = Fired.of_first(first[pid], n_steps)
     events = {qid: sum(_synaptic_events(dl, k, d, spikes[dl.source])
                        for k, d in enumerate(dl.delays)) for qid, dl in plan.deliveries.items()}
-    counts, rasters = {}, {} if record else None
+    counts, totals, rasters = {}, {}, {} if record else None
     for pid, pop in plan.populations.items():
         fired, n = spikes[pid], n_frames * pop.size
+        if rasters is not None:
+            flat, step = fired.events()
+            rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
+            f, i = np.divmod(flat, pop.size)
+            rasters[pid][f, step, i] = True
         if fired.first is not None:  # fire-once neurons and latency trains: one spike at most
             first[pid] = fired.first
-            counts[pid] = fired.fired_mask.reshape(n_frames, -1)  # 0/1: no int64 copy
-        elif fired.raster is not None:  # stream trains: dense bit planes, no event lists
+            spans = getattr(plan.neurons.get(pid), "spans", None)
+            counts[pid] = (np.zeros((n_frames, pop.size), bool)  # never spiking: none
+                           if spans is not None and not any(s.spiking_on for s in spans)
+                           else fired.fired_mask.reshape(n_frames, -1))  # 0/1: no int64 copy
+        elif fired.stream is not None:  # stream levels: the total now, per neuron on demand
+            totals[pid] = fired.stream.total(n_steps)
+            counts[pid] = lambda f=fired, n=n_frames: f.counts_before(f.n_steps).reshape(n, -1)
+            first[pid] = lambda f=fired, n=n_frames: f.first_steps().reshape(n, -1)
+            continue
+        elif fired.has_raster:  # stream trains as bit planes, no event lists
             counts[pid] = fired.counts_before(n_steps).reshape(n_frames, -1)
             first[pid] = fired.first_steps()
         else:
@@ -115,12 +128,8 @@ def run_closed(
             counts[pid] = np.bincount(flat, minlength=n).astype(np.int64).reshape(n_frames, -1)
             first[pid] = first_spike_steps(flat, step, n)
         first[pid] = first[pid].reshape(n_frames, -1)
-        if rasters is not None:
-            flat, step = fired.events()
-            rasters[pid] = np.zeros((n_frames, n_steps, pop.size), bool)
-            f, i = np.divmod(flat, pop.size)
-            rasters[pid][f, step, i] = True
-    return Activity(first, counts, membrane, events, rasters)
+    return Activity(LazyArrays(first), LazyArrays(counts), membrane, events, rasters,
+                    totals=totals)
 
 
 def _fired_of_train(train: Train, n_steps: int) -> Fired:
@@ -131,16 +140,14 @@ def _fired_of_train(train: Train, n_steps: int) -> Fired:
     if first is not None:  # a latency train carries its first-spike steps
         return Fired.of_first(first, n_steps)
     if isinstance(train, StreamTrain):
-        return Fired.of_raster(train.planes, train.start, n_steps)
+        return Fired.of_stream(train.stream, n_steps)
     return Fired.of_events(*train.all_events(), n_steps)
 
 
 def _synaptic_events(dl, k: int, delay: int, fired: Fired) -> int:
     """Synaptic events of delay class ``k``: the spikes arriving within the window."""
-    if fired.first is None and fired.raster is not None:  # spikes per source, then synapses
-        per_source = synapses_per_source(dl, k)
-        spiked = fired.counts_before(fired.n_steps - delay).reshape(-1, per_source.size)
-        return int(spiked.sum(axis=0) @ per_source)
+    if fired.first is None and fired.has_raster:  # spikes per source, then synapses
+        return fired.synaptic_events(fired.n_steps - delay, synapses_per_source(dl, k))
     if fired.first is None:
         flat, step = fired.events()
         return dl.n_events(k, flat[:int(np.searchsorted(step, fired.n_steps - delay))])

@@ -20,6 +20,7 @@ A decoder with per-index gains (``gain_axis``, ``gains``) divides every value bu
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from functools import lru_cache
 
 import numpy as np
 
@@ -42,7 +43,9 @@ def _count(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> 
 
 
 def _membrane(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
-    return (dec.scale * act.membrane[pid].astype(np.float64) + dec.offset) / gains
+    y = np.multiply(act.membrane[pid], dec.scale, dtype=np.float64)  # one buffer, in place
+    np.add(y, dec.offset, out=y)
+    return np.divide(y, gains, out=y)
 
 
 def _spiked(dec: Decoder, act: Activity, pid: str, gains: np.ndarray | float) -> np.ndarray:
@@ -64,6 +67,15 @@ DECODERS: dict[str, Decode] = {
     "spiked": _spiked,
     "spike_table": _spike_table,
 }
+
+
+@lru_cache(maxsize=8)
+def _neuron_gains(dec: Decoder, shape: tuple[tuple[str, int], ...]) -> np.ndarray | float:
+    """``dec.neuron_gains`` of a population's shape, kept for the next frames (read-only)."""
+    gains = dec.neuron_gains(dict(shape))
+    if isinstance(gains, np.ndarray):
+        gains.flags.writeable = False
+    return gains
 
 
 def check_decoders(network: SpikingNetwork) -> None:
@@ -103,7 +115,7 @@ def check_decoders(network: SpikingNetwork) -> None:
         if dec.gain_axis == PART_AXIS:
             raise NetworkError(f"decoder {dec.port!r}: gains run along a value axis, not "
                                f"{PART_AXIS!r}", node=dec.port)
-        dec.neuron_gains(pop.shape)
+        _neuron_gains(dec, tuple(pop.shape.items()))  # (checked once, kept for decoding)
 
 
 def decode_outputs(
@@ -154,7 +166,7 @@ def decode_outputs(
     out = {}
     for dec in network.decoders:
         pop = pops[dec.population]
-        y = decoders[dec.kind](dec, activity, pop.id, dec.neuron_gains(pop.shape))
+        y = decoders[dec.kind](dec, activity, pop.id, _neuron_gains(dec, tuple(pop.shape.items())))
         y = combine_parts(y.reshape(-1, *pop.dims), dec.combine)
         out[dec.port] = y if framed else y[0]
     return out

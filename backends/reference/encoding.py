@@ -32,6 +32,7 @@ import numpy as np
 
 from backends.reference.input_range import DEFAULT_POLICY, check_policy, check_range
 from backends.reference.order import events_of_first
+from backends.reference.stream_levels import StreamLevels
 from compiler.snn.coding import N_PARTS, LatencyCode, RateCode, normalize_values, split_values
 from compiler.snn.network import SpikingNetwork
 from compiler.snn.stream import BIT_AXIS, StreamCode
@@ -145,16 +146,31 @@ class StreamTrain:
     ([[], [0, 1], [1], []], [[0, 1, 1], [1, 1, 2]])
     """
 
-    planes: np.ndarray  # (length, frames·size) spikes per streamed index
-    start: int
+    #: The levels, row ``n`` sent at step ``start_step + n`` (cut at ``n_steps``).
+    stream: StreamLevels
     #: Bit neurons spike once per sample whose bit is set.
     at_most_once: ClassVar[bool] = False
 
     @classmethod
     def build(cls, code: StreamCode, values: np.ndarray, n_steps: int) -> StreamTrain:
-        """Bit planes of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
-        planes = code.bit_planes(values)[:max(0, n_steps - code.start_step)]
-        return cls(planes, code.start_step)
+        """Levels of ``values`` (shape ``(frames, size)``), cut at ``n_steps``."""
+        return cls.of_levels(code, code.level_rows(values), n_steps)
+
+    @classmethod
+    def of_levels(cls, code: StreamCode, levels: np.ndarray, n_steps: int) -> StreamTrain:
+        """The train of ``code``'s level rows ``levels``, cut at ``n_steps``."""
+        levels = levels[:max(0, n_steps - code.start_step)]
+        return cls(StreamLevels(levels, code.bits, code.start_step))
+
+    @property
+    def start(self) -> int:
+        """The step of row 0."""
+        return self.stream.start
+
+    @property
+    def planes(self) -> np.ndarray:
+        """``(rows, frames·size)`` boolean spikes per streamed index (built once)."""
+        return self.stream.raster()[0]
 
     def events_at(self, t: int) -> np.ndarray:
         """Flat indices of the neurons spiking at step ``t``, ascending."""
@@ -284,6 +300,9 @@ def encode_inputs(
     for port, enc in ports.items():
         x = arrays[port] if n is not None else arrays[port][None]
         x = normalize_values(x, _normalize_axes(network, enc))
+        if (train := _signed_stream(enc, x, trains, network.n_steps)) is not None:
+            out[enc.population] = train
+            continue
         parts = split_values(x, enc.split)
         count = check_range(port, enc.code, parts, n_parts=N_PARTS[enc.split],
                             n_steps=network.n_steps, framed=n is not None,
@@ -294,6 +313,22 @@ def encode_inputs(
         parts = parts.reshape(n_frames, -1)
         out[enc.population] = trains[enc.code.type](enc.code, parts, network.n_steps)
     return out, n_frames, n is not None
+
+
+def _signed_stream(enc, x: np.ndarray, trains: Mapping, n_steps: int) -> StreamTrain | None:
+    """The stream train of complex ``x`` straight from its components
+    (:meth:`~compiler.snn.stream.StreamCode.signed_level_rows`) when no part is above the
+    code's bound; None otherwise (out of range: the policy's path with the parts)."""
+    code = enc.code
+    if (enc.split != "re_im_signed" or code.type != "stream" or x.dtype != np.complex128
+            or trains.get("stream") != StreamTrain.build or not x.size):
+        return None
+    x = np.ascontiguousarray(x)  # (a host op's output may be a strided view)
+    comps = x.reshape(-1).view(np.float64)
+    if max(comps.max(), -comps.min()) > code.bound():
+        return None
+    levels = code.signed_level_rows(x)
+    return None if levels is None else StreamTrain.of_levels(code, levels, n_steps)
 
 
 def _normalize_axes(network: SpikingNetwork, enc) -> tuple[int, ...]:
@@ -329,6 +364,11 @@ def _check_array(
     else:
         raise SimulationError(f"input {port!r}: expected shape {want} or (n_frames, *{want}) "
                               f"with n_frames >= 1, got {x.shape}", node=port)
+    if x.dtype.kind in "biu":
+        return x, n
+    with np.errstate(all="ignore"):  # (a sum past the range or of ±inf: the mask decides)
+        if x.size and np.isfinite(np.sum(x)):
+            return x, n  # a finite sum: every value finite (no mask built)
     bad = ~np.isfinite(x)
     if bad.any():
         first = tuple(int(i) for i in np.argwhere(bad)[0])

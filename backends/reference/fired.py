@@ -2,7 +2,9 @@ r"""The spikes of one population as the closed form hands them on: first-spike s
 
 A population whose neurons spike at most once (fire-once neurons, latency trains) is
 kept as its *first-spike steps* ``first`` (flat over ``(frames, size)``, ``-1``: none);
-a stream train as its dense *raster* (one boolean row per step, from step ``start``);
+a stream train as its dense *raster* (one boolean row per step, from step ``start``),
+or as its integer levels (:class:`~backends.reference.stream_levels.StreamLevels`, the
+raster built only when asked for);
 any other as *events* ``(flat, step)``, ordered by step and, within a step, by neuron.
 The events of a first-spike record are built once, when something asks for them, so a
 consumer that can work from ``first`` directly — the silent span's arrival features —
@@ -36,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from backends.reference.order import events_of_first
+from backends.reference.stream_levels import StreamLevels
 
 __all__ = ["Fired"]
 
@@ -46,16 +49,31 @@ class Fired:
     Build with :meth:`of_first` or :meth:`of_events`; ``first`` is None for the latter.
     """
 
-    __slots__ = ("first", "n_steps", "_events", "_mask", "raster", "_counts")
+    __slots__ = ("first", "n_steps", "_events", "_mask", "_raster", "_counts", "stream")
 
     def __init__(self, first: np.ndarray | None, n_steps: int,
                  events: tuple[np.ndarray, np.ndarray] | None = None,
-                 raster: tuple[np.ndarray, int] | None = None) -> None:
+                 raster: tuple[np.ndarray, int] | None = None,
+                 stream: StreamLevels | None = None) -> None:
         self.first, self.n_steps, self._events, self._mask = first, n_steps, events, None
-        #: ``(rows, start)``: row ``r`` of the boolean ``rows`` holds the spikes of step
-        #: ``start + r`` (a stream train's bit planes), or None.
-        self.raster = raster
+        self._raster = raster
+        #: The levels of a stream train (the raster follows from them), or None.
+        self.stream = stream
         self._counts: dict[int, np.ndarray] = {}
+
+    @property
+    def raster(self) -> tuple[np.ndarray, int] | None:
+        """``(rows, start)``: row ``r`` of the boolean ``rows`` holds the spikes of step
+        ``start + r`` (a stream train's bit planes, built from its levels on first use),
+        or None."""
+        if self._raster is None and self.stream is not None:
+            self._raster = self.stream.raster()
+        return self._raster
+
+    @property
+    def has_raster(self) -> bool:
+        """Whether :attr:`raster` is available (without building it)."""
+        return self._raster is not None or self.stream is not None
 
     @classmethod
     def of_first(cls, first: np.ndarray, n_steps: int) -> Fired:
@@ -73,6 +91,12 @@ class Fired:
         ``n_steps``; the events are built only if something asks for them."""
         return cls(None, n_steps, raster=(rows, start))
 
+    @classmethod
+    def of_stream(cls, stream: StreamLevels, n_steps: int) -> Fired:
+        """A stream train's levels: counts and first steps come from them, the raster is
+        built only if something asks for it."""
+        return cls(None, n_steps, stream=stream)
+
     def events(self) -> tuple[np.ndarray, np.ndarray]:
         """``(flat, step)`` ordered by step, ties by neuron (built once from ``first`` or
         the raster)."""
@@ -86,14 +110,29 @@ class Fired:
 
     def counts_before(self, stop: int) -> np.ndarray:
         """Spikes per neuron at steps below ``stop`` (int64; a raster only)."""
+        if stop not in self._counts and self.stream is not None:
+            self._counts[stop] = self.stream.counts_before(stop)
         if stop not in self._counts:  # asked once per delay class and for the totals
             rows, start = self.raster
             self._counts[stop] = np.count_nonzero(rows[:max(0, stop - start)],
                                                   axis=0).astype(np.int64)
         return self._counts[stop]
 
+    def synaptic_events(self, stop: int, per_source: np.ndarray) -> int:
+        """Spikes before ``stop`` × the synapses each reaches (``per_source``, per neuron of
+        one frame), summed (a raster or levels only; levels: by column popcounts when
+        every bit neuron of a column reaches as many synapses)."""
+        if self.stream is not None:
+            events = self.stream.synaptic_events(stop, per_source)
+            if events is not None:
+                return events
+        spiked = self.counts_before(stop).reshape(-1, per_source.size)
+        return int(spiked.sum(axis=0) @ per_source)
+
     def first_steps(self) -> np.ndarray:
-        """First spike step per neuron, ``-1``: none (a raster only)."""
+        """First spike step per neuron, ``-1``: none (a raster or levels only)."""
+        if self.stream is not None:
+            return self.stream.first_steps()
         rows, start = self.raster
         first = np.full(rows.shape[1], -1, np.int64)
         todo, new = np.ones(rows.shape[1], bool), np.empty(rows.shape[1], bool)

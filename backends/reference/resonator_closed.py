@@ -23,10 +23,19 @@ rounding half away from zero is ``rint(u·(1 + 2^{-51}))``: the factor moves an 
 ``2^{-51}|u| ≥ 2`` ulps away from zero, and any other ``u`` by less than ``2^{-50}|u|``,
 which stays below the ``2^{-F}`` between ``u`` and the nearest half while
 ``|u| < 2^{49-F}``.  Both conditions are checked before the replay from a bound on
-``|z|`` (``|z| ← |a|(|z| + max|d|) + 1``); where they fail the step arithmetic
-(:func:`~backends.reference.resonator.rotate`, int64 or float64) runs instead, as it
-does for fractional drives in float64.  Either way the result is the step engine's, bit
-for bit (``tests/test_resonator_closed.py``).
+``|z|`` (``|z| ← |a|(|z| + max|d|) + 1``, with ``|d| ≤ √2·max(|Re d|, |Im d|)`` per step);
+where they fail the step arithmetic (:func:`~backends.reference.resonator.rotate`, int64
+or float64) runs instead, as it does for fractional drives in float64.  Either way the
+result is the step engine's, bit for bit (``tests/test_resonator_closed.py``).
+
+*Cost per step and row block* (``rb × K × P`` entries): the rotation is three in-place
+passes — the complex product by ``a``, the factor ``1 + 2^{-51}``, ``rint`` — which is the
+floor of :func:`backends.reference.floor.rotation_floors`; the drive adds a fourth, since
+each step's drive enters before that step's rounding (no two steps' drives can be summed
+first).  A drive shared along the bins is added as a rank-one update (``zgeru``: the ``(K,
+rb)`` view plus ``1 ⊗ d_j`` when ``P = 1``, else the ``(P, K)`` view of each row plus
+``d_{j,r} ⊗ 1``), BLAS calls prepared once per block.  The drive itself comes from the
+stream source's levels (:mod:`backends.reference.level_drive`), never from its bit planes.
 
 Examples
 --------
@@ -36,6 +45,8 @@ Examples
 """
 
 from __future__ import annotations
+
+import weakref
 
 import numpy as np
 from scipy.linalg.blas import zgeru as _zgeru
@@ -55,6 +66,10 @@ _BLOCK_ENTRIES = 1 << 15
 #: Resonators × steps of one full drive histogram (a drive not shared along the bins): its
 #: four compartments in float64 take 8 MiB.
 _FULL_ENTRIES = 1 << 18
+#: ``√2`` rounded up: ``|d| ≤ _SQRT2 · max(|Re d|, |Im d|)``.
+_SQRT2 = 1.4142135623730951 * (1.0 + 2.0 ** -50)
+#: :func:`input_layout` per plan's population parameters.
+_LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
@@ -83,19 +98,19 @@ def solve_resonators(plan: SimPlan, pid: str, arrivals: list, n_frames: int,
     (lead, k, tail), coefs = input_layout(plan, pid)
     shape = (n_frames * lead, k, tail)
     z = np.zeros(shape, np.complex128)
-    v = np.zeros(n, dtype)
+    v = None  # (the compartments of z once an input span ran)
     for seg in params.spans:
         if not seg.input_on:
-            _, v = charge(v, first, seg, params)
+            _, v = charge(np.zeros(n, dtype) if v is None else v, first, seg, params)
             continue
         shared = shared_drive(plan, pid, arrivals, n_frames, seg.start, seg.stop)
         blocks = ([(seg.start, shared.reshape(-1, shape[0], 1, tail))]
                   if shared is not None else _full_blocks(full, seg, shape))
-        for s0, d in blocks:
+        for s0, d in blocks:  # (a shared drive is whole in fixed point: resonator_drive)
             z = (_linear(z, d, coefs[0]) if not params.coef_bits
-                 else _replay(z, d, s0, params, coefs))
+                 else _replay(z, d, s0, params, coefs, whole=shared is not None))
         v = _project(z, dtype)
-    return v
+    return np.zeros(n, dtype) if v is None else v
 
 
 def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
@@ -103,7 +118,15 @@ def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
     """``((lead, K, P), (a, a_end))`` of resonator population ``pid``: one frame's state is
     ``(lead, K, P)`` (the axes before the resonator axis, its bins, the axes after it but
     ``part``); ``a`` and ``a_end`` are ``(K, P)`` complex, divided by ``2^F`` in fixed point
-    (``a_end`` None without renormalisation)."""
+    (``a_end`` None without renormalisation); computed once per plan's population (read-only
+    arrays)."""
+    params = plan.neurons[pid]
+    if params not in _LAYOUTS:
+        _LAYOUTS[params] = _layout(plan, pid)
+    return _LAYOUTS[params]
+
+
+def _layout(plan: SimPlan, pid: str):
     params = plan.neurons[pid]
     pop = plan.populations[pid]
     at = pop.axes.index(plan.network.population[pid].params.axis)
@@ -115,7 +138,11 @@ def input_layout(plan: SimPlan, pid: str) -> tuple[tuple[int, int, int],
             lead, k, tail)[0].copy()
 
     end = of(params.cos_end, params.sin_end) if params.renorm is not None else None
-    return (lead, k, tail), (of(params.cos, params.sin), end)
+    coefs = (of(params.cos, params.sin), end)
+    for c in coefs:
+        if c is not None:
+            c.setflags(write=False)
+    return (lead, k, tail), coefs
 
 
 def _full_blocks(full, seg, shape):
@@ -143,13 +170,14 @@ def _linear(z: np.ndarray, d: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 
 def _replay(z: np.ndarray, d: np.ndarray, s0: int, params: ResonatorStepParams,
-            coefs: tuple[np.ndarray, np.ndarray | None]) -> np.ndarray:
-    """The fixed-point steps ``s0 … s0 + m − 1`` (see the module docstring)."""
+            coefs: tuple[np.ndarray, np.ndarray | None], whole: bool = False) -> np.ndarray:
+    """The fixed-point steps ``s0 … s0 + m − 1`` (see the module docstring); ``whole``: the
+    drive is known to be whole (not checked again)."""
     m = d.shape[0]
     a, a_end = coefs
     ends = (params.renorm[s0:s0 + m] if params.renorm is not None
             else np.zeros(m, bool))
-    if not _exact(z, d, a, a_end, params.coef_bits):
+    if not _exact(z, d, a, a_end, params.coef_bits, whole):
         return _replay_steps(z, d, s0, params, coefs)
     return replay_rows(z, a, m, d, a_end, ends)
 
@@ -169,51 +197,72 @@ def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | 
     """
     out = np.empty_like(z)
     rows = max(1, _BLOCK_ENTRIES // (z.shape[1] * z.shape[2]))
-    ones = np.ones(max(z.shape[1], 1), np.complex128)
+    coef = [a_end if ends is not None and ends[j] else a for j in range(n_steps)]
     for r0 in range(0, z.shape[0], rows):
         block = z[r0:r0 + rows].copy()
         flat = block.view(np.float64)
-        part = None if drive is None else drive[:, r0:r0 + rows]
+        add = None if drive is None else _drive_adder(block, drive[:n_steps, r0:r0 + rows])
         for j in range(n_steps):
-            if part is not None:
-                _add_drive(block, part[j], ones)
-            block *= a_end if ends is not None and ends[j] else a
-            flat *= _AWAY
+            if add is not None:
+                add(j)
+            np.multiply(block, coef[j], out=block)
+            np.multiply(flat, _AWAY, out=flat)
             np.rint(flat, out=flat)
         out[r0:r0 + rows] = block
     return out
 
 
-def _add_drive(block: np.ndarray, d: np.ndarray, ones: np.ndarray) -> None:
-    """``block += d`` in place (``(rb, K, P)`` and ``(rb, 1 | K, P)``): a drive shared along
-    the bins as rank-one updates (BLAS ``zgeru``: ``1·d`` is ``d``, the sums are the same
+def _drive_adder(block: np.ndarray, part: np.ndarray):
+    """``add(j)``: ``block += part[j]`` in place (``block`` ``(rb, K, P)``, ``part``
+    ``(m, rb, 1 | K, P)``).  A drive shared along the bins is added as rank-one updates
+    (BLAS ``zgeru`` on F-ordered views of ``block``: ``1·d`` is ``d``, the sums are the same
     exact sums), which skip numpy's per-row broadcasting; else a plain ``+=``."""
     rb, k, p = block.shape
-    if d.shape[1] != 1 or (p > 1 and rb > 8):
-        block += d
-        return
-    pairs = ([(block.reshape(rb, k).T, ones, d.reshape(rb))] if p == 1 else
-             [(block[r].T, d[r, 0], ones) for r in range(rb)])  # F-ordered views of block
-    for view, x, y in pairs:
-        res = _zgeru(1.0, x, y, a=view, overwrite_a=True)
-        if not np.shares_memory(res, view):  # pragma: no cover (scipy copied: write back)
-            view[...] = res
+    if part.shape[2] != 1 or (p > 1 and rb > 8):
+        return lambda j: np.add(block, part[j], out=block)
+    ones = np.ones(k, np.complex128)
+    if p == 1:  # one update of the (K, rb) view per step: x = ones, y = the rows' drives
+        views = [(block.reshape(rb, k).T, part.reshape(len(part), rb))]
+    else:  # one per row: the (P, K) view of row r, x = its drives along P, y = ones
+        views = [(block[r].T, part[:, r, 0, :]) for r in range(rb)]
+    first = views[0][0]
+    probe = _zgeru(0.0, np.zeros(first.shape[0], np.complex128),
+                   np.zeros(first.shape[1], np.complex128), a=first, overwrite_a=True)
+    if not np.shares_memory(probe, first):  # pragma: no cover (scipy would copy)
+        return lambda j: np.add(block, part[j], out=block)
+    if p == 1:
+        view, ys = views[0]
+        return lambda j: _zgeru(1.0, ones, ys[j], a=view, overwrite_a=True)
+
+    def add(j: int) -> None:
+        for view, xs in views:
+            _zgeru(1.0, xs[j], ones, a=view, overwrite_a=True)
+    return add
 
 
-def _exact(z, d, a, a_end, bits: int) -> bool:
-    """Whether the float64 replay is exact: whole drives, ``2^{F+1}|z̃| < 2^{52}`` and
-    ``|u| < 2^{49−F}`` for the bound ``|z̃|`` of every step's ``z + d``."""
-    if not np.array_equal(d, np.rint(d)):
+def _exact(z, d, a, a_end, bits: int, whole: bool = False) -> bool:
+    """Whether the float64 replay is exact: whole drives (checked unless ``whole``),
+    ``2^{F+1}|z̃| < 2^{52}`` and ``|u| < 2^{49−F}`` for the bound ``|z̃|`` of every step's
+    ``z + d`` (``|d|`` bounded by ``√2`` times its largest component)."""
+    if not whole and not np.array_equal(d, np.rint(d)):
         return False
     growth = max(float(np.abs(a).max()), float(np.abs(a_end).max()) if a_end is not None
                  else 0.0)
-    top = np.abs(d).reshape(d.shape[0], -1).max(axis=1)
-    bound, worst = float(np.abs(z).max(initial=0.0)), 0.0
+    top = _SQRT2 * _largest(d)
+    bound, worst = _SQRT2 * float(_largest(z[None])[0]), 0.0
     for dj in top.tolist():
         bound += dj
         worst = max(worst, bound)
         bound = growth * bound + 1.0
     return worst * 2.0 ** (bits + 1) < 2.0 ** 52 and worst * growth < 2.0 ** (49 - bits)
+
+
+def _largest(d: np.ndarray) -> np.ndarray:
+    """The largest ``|Re|, |Im|`` per leading index (0 if empty)."""
+    c = np.ascontiguousarray(d).view(np.float64).reshape(d.shape[0], -1)
+    if c.shape[1] == 0:
+        return np.zeros(d.shape[0])
+    return np.maximum(c.max(axis=1), -c.min(axis=1))
 
 
 def _replay_steps(z, d, s0, params, coefs):
@@ -232,9 +281,8 @@ def _replay_steps(z, d, s0, params, coefs):
 
 def _project(z: np.ndarray, dtype) -> np.ndarray:
     """Compartment membranes ``(Re, −Re, Im, −Im)`` per resonator, flat."""
-    out = np.empty((*z.shape, N_COMPARTMENTS), dtype)
-    out[..., 0] = z.real
-    out[..., 2] = z.imag
+    out = np.empty((*z.shape, 2, 2), dtype)  # (Re, Im) × (+, −): the compartments' order
+    pairs = np.ascontiguousarray(z).reshape(-1).view(np.float64).reshape(*z.shape, 2)
+    np.copyto(out[..., 0], pairs, casting="unsafe")  # (whole values: exact in int64)
     np.negative(out[..., 0], out=out[..., 1])
-    np.negative(out[..., 2], out=out[..., 3])
     return out.reshape(-1)

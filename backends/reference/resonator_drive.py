@@ -10,7 +10,10 @@ function of the repetition alone, and the closed form computes it for one bin �
 ``(steps · frames · repetitions) × n_in`` count table (a stream train's raster rows as
 they are, else one ``bincount`` of the events) times the ``n_in × n_out / K`` slice of the
 weights (float32 where every sum is a whole number below ``2**24``) — instead of the
-``K``-times larger histogram of every compartment.
+``K``-times larger histogram of every compartment.  From a stream source whose weights
+are ``2^b`` times one matrix on bit ``b`` (the motif's), the count table is never built:
+the product is the levels' own (:mod:`backends.reference.level_drive`), one per stream and
+delay however many projections split its bits.
 
 The sums are those of the step engine whenever they are exact: int64 arithmetic, or
 whole-number weights whose row sums stay below ``2**52`` (each neuron spikes at most once
@@ -54,6 +57,7 @@ from math import prod
 import numpy as np
 import scipy.sparse as sp
 
+from backends.reference.level_drive import LevelWeights, level_current, level_weights
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
 from compiler.snn.resonator import N_COMPARTMENTS
@@ -76,7 +80,7 @@ class SharedWeights:
     the delivery's permutation into target order.
     """
 
-    __slots__ = ("weights", "block", "to_target", "dense", "order", "weights32")
+    __slots__ = ("weights", "block", "to_target", "dense", "order", "weights32", "_levels")
 
     def __init__(self, weights: np.ndarray, block: tuple[int, ...],
                  to_target: tuple[int, ...], dense: bool = False,
@@ -90,6 +94,15 @@ class SharedWeights:
         whole = np.array_equal(weights, np.rint(weights))
         small = np.abs(weights).sum(axis=0).max(initial=0.0) < 2.0 ** 24
         self.weights32 = weights.astype(np.float32) if whole and small else None
+        self._levels: dict[tuple[int, int, int], LevelWeights | None] = {}
+
+    def by_levels(self, n_reps: int, bits: int, inner: int) -> LevelWeights | None:
+        """The weights factored over the levels of a stream source of ``bits`` bits and
+        ``inner`` values after the streamed axis (dense slots only), or None (computed once)."""
+        key = (n_reps, bits, inner)
+        if key not in self._levels:
+            self._levels[key] = level_weights(self.weights, self.order, n_reps, bits, inner)
+        return self._levels[key]
 
 
 def _reduce(plan: SimPlan, dl, k: int, axis: str) -> SharedWeights | None:
@@ -150,20 +163,54 @@ def shared_drive(plan: SimPlan, pid: str, arrivals: list, n_frames: int, s0: int
         return None
     dims = tuple(1 if a == axis else s for a, s in zip(pop.axes, pop.dims, strict=True))
     n_t = s1 - s0
-    total = np.zeros((n_t * n_frames, *dims))
+    out = np.zeros((n_t * n_frames, *dims[:-1]), np.complex128)  # folded contributions
+    total = None  # compartment currents of the others, folded at the end
+    for red, arr, lw in _merge_levels(reduced):
+        if (lw is not None and lw.folded is not None and red.block[-1] == N_COMPARTMENTS
+                and red.to_target[-1] == len(red.block) - 1):  # compartments last
+            _add_level_drive(out, red, lw, arr, n_frames, s0, s1, folded=True)
+            continue
+        if total is None:
+            total = np.zeros((n_t * n_frames, *dims))
+        if lw is not None:
+            _add_level_drive(total, red, lw, arr, n_frames, s0, s1)
+        else:
+            _add_drive(total, red, arr, n_frames, s0, s1)
+    if total is not None:  # whole sums: (ΣI_0 − ΣI_1) is Σ(I_0 − I_1), exactly
+        out += fold(total)
+    return out.reshape(n_t, n_frames, *dims[:-1])
+
+
+def _merge_levels(reduced: list) -> list:
+    """``(red, arr, lw)`` per arrival class, ``lw`` its factorisation over a stream source's
+    levels (None: the raster or events); classes from the same stream with the same delay,
+    layout and ``V`` but disjoint bits (the bit groups of one motif) merged into one."""
+    out = []
     for red, arr in reduced:
-        _add_drive(total, red, arr, n_frames, s0, s1)
-    return fold(total.reshape(n_t, n_frames, *dims[:-1], N_COMPARTMENTS))
+        stream = arr.fired.stream if red.dense else None
+        n_reps = prod(red.block) // red.weights.shape[1]
+        lw = None if stream is None else red.by_levels(n_reps, stream.bits, stream.inner)
+        for i, (red0, arr0, lw0) in enumerate(out):
+            if (lw is not None and lw0 is not None and arr0.fired is arr.fired
+                    and arr0.delay == arr.delay and red0.block == red.block
+                    and red0.to_target == red.to_target
+                    and (both := lw0.merged(lw)) is not None):
+                out[i] = (red0, arr0, both)
+                break
+        else:
+            out.append((red, arr, lw))
+    return out
 
 
 def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,
                s1: int) -> None:
-    """``total += `` the current of ``arr``'s events in ``[s0, s1)`` through ``red``."""
+    """``total += `` the current of ``arr``'s events in ``[s0, s1)`` through ``red`` (the
+    raster's rows or the events counted)."""
     dl = arr.delivery
     n_reps, n_in = prod(red.block) // red.weights.shape[1], dl.n_in
     per_step = n_frames * n_reps * n_in
     chunk = max(1, _COUNT_BYTES // (8 * per_step))
-    if red.dense and arr.fired.raster is not None:
+    if red.dense and arr.fired.has_raster:
         _add_raster_drive(total, red, arr, n_frames, s0, s1, chunk)
         return
     flat, arrive = arr.within(s0, s1)
@@ -183,6 +230,25 @@ def _add_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: in
         current = (counts @ red.weights).reshape((t1 - t0) * n_frames, *red.block)
         current = current.transpose(0, *(1 + a for a in red.to_target))
         total[(t0 - s0) * n_frames:(t1 - s0) * n_frames] += current
+
+
+def _add_level_drive(total: np.ndarray, red: SharedWeights, lw, arr, n_frames: int, s0: int,
+                     s1: int, folded: bool = False) -> None:
+    """:func:`_add_drive` from a stream train's levels (:mod:`backends.reference.level_drive`;
+    arrivals at ``n_steps`` or later cut, as for the raster); ``folded``: ``total`` is the
+    complex drive (no compartment axis) and the product is folded already."""
+    stream = arr.fired.stream
+    first = stream.start + arr.delay  # the arrival step of level row 0
+    lo, hi = max(s0, first), min(s1, first + len(stream.levels), arr.n_steps)
+    if lo >= hi:
+        return
+    current = level_current(stream.levels, lw, lo - first, hi - first, n_frames, folded)
+    block, order = red.block, red.to_target
+    if folded:
+        current, block, order = current.view(np.complex128), block[:-1], order[:-1]
+    current = current.reshape((hi - lo) * n_frames, *block)
+    total[(lo - s0) * n_frames:(hi - s0) * n_frames] += current.transpose(
+        0, *(1 + a for a in order))
 
 
 def _add_raster_drive(total: np.ndarray, red: SharedWeights, arr, n_frames: int, s0: int,

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Activity", "SimResult", "first_step_dtype", "first_steps"]
+__all__ = ["Activity", "LazyArrays", "SimResult", "first_step_dtype", "first_steps"]
 
 
 def first_step_dtype(n_steps: int) -> np.dtype:
@@ -43,6 +44,48 @@ def first_steps(first: np.ndarray, n_steps: int, shape: tuple[int, ...]) -> np.n
     return np.asarray(first).reshape(shape).astype(first_step_dtype(n_steps), copy=False)
 
 
+class LazyArrays(Mapping):
+    """A read-only mapping whose values are arrays or zero-argument functions computing them;
+    a function is called on first access and its array kept (values nobody reads, such as a
+    stream source's per-neuron first spikes, cost nothing).  Pickles as a plain dict.
+
+    Examples
+    --------
+    >>> calls = []
+    >>> m = LazyArrays({"a": np.zeros(2), "b": lambda: calls.append(1) or np.ones(3)})
+    >>> sorted(m), calls
+    (['a', 'b'], [])
+    >>> m["b"].tolist(), m["b"].shape, calls
+    ([1.0, 1.0, 1.0], (3,), [1])
+    >>> import pickle
+    >>> type(pickle.loads(pickle.dumps(m))).__name__
+    'dict'
+    """
+
+    __slots__ = ("_values",)
+
+    def __init__(self, values: Mapping[str, np.ndarray | Callable[[], np.ndarray]]) -> None:
+        self._values = dict(values)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        value = self._values[key]
+        if callable(value):
+            value = self._values[key] = value()
+        return value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __reduce__(self):
+        return dict, (dict(self.items()),)
+
+    def __repr__(self) -> str:
+        return f"LazyArrays({sorted(self._values)})"
+
+
 @dataclass(frozen=True, eq=False)
 class Activity:
     """The raw record both engines produce (flat per-neuron arrays, frames first).
@@ -64,6 +107,9 @@ class Activity:
     overflow : dict
         Per population, neuron-steps with ``u`` or ``v`` beyond the chip's state range
         (the step engine; populations without any left out).
+    totals : dict
+        Per population, its spikes summed, where known without its per-neuron ``counts``
+        (which may then be computed on demand, :class:`LazyArrays`).
     """
 
     first_spike: dict[str, np.ndarray]
@@ -72,6 +118,12 @@ class Activity:
     synaptic_events: dict[str, int]
     rasters: dict[str, np.ndarray] | None = None
     overflow: dict[str, int] = field(default_factory=dict)
+    totals: dict[str, int] = field(default_factory=dict)
+
+    def spike_totals(self) -> dict[str, int]:
+        """Spikes per population over the batch (``totals``, else the counts summed)."""
+        return {pid: self.totals[pid] if pid in self.totals else int(self.counts[pid].sum())
+                for pid in self.counts}
 
 
 @dataclass(frozen=True, eq=False)

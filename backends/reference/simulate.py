@@ -19,7 +19,7 @@ from backends.reference.guards import (
 from backends.reference.input_range import DEFAULT_POLICY
 from backends.reference.plan import SimPlan
 from backends.reference.plan_cache import cached_plan, peek_plan
-from backends.reference.result import Activity, SimResult, first_steps
+from backends.reference.result import Activity, LazyArrays, SimResult, first_steps
 from backends.reference.run_options import ENGINE_MODES, RunOptions
 from backends.reference.step import run_step
 from compiler.snn.network import SpikingNetwork
@@ -202,10 +202,13 @@ def simulate(
     pops = network.population
     return SimResult(
         outputs=decode_outputs(network, act, framed),
-        spike_counts={pid: int(c.sum()) for pid, c in act.counts.items()},
+        spike_counts=act.spike_totals(),
         synaptic_events=dict(act.synaptic_events),
-        first_spike_steps={pid: first_steps(f, network.n_steps, (n_frames, *pops[pid].dims))
-                           for pid, f in act.first_spike.items()},
+        first_spike_steps=LazyArrays({  # in their dtype when read (a source's may be lazy;
+            # the closures hold the first spikes only, not the rest of the activity)
+            pid: (lambda pid=pid, first=act.first_spike, dims=pops[pid].dims:
+                  first_steps(first[pid], network.n_steps, (n_frames, *dims)))
+            for pid in act.first_spike}),
         spikes=None if act.rasters is None else {
             pid: r.reshape(n_frames, network.n_steps, *pops[pid].dims)
             for pid, r in act.rasters.items()},
@@ -224,5 +227,7 @@ def _overflow(plan, act) -> dict[str, int]:
     limit = plan.state_limit
     if limit is None or act.overflow:
         return dict(act.overflow)
-    return {pid: n for pid, v in act.membrane.items()
-            if (n := int(np.count_nonzero(np.abs(v) > limit)))}
+    return {pid: n for pid, v in act.membrane.items()  # counted only past the extremes
+            if v.size and (np.fmax.reduce(v, axis=None) > limit  # (fmax, fmin: NaN skipped)
+                           or np.fmin.reduce(v, axis=None) < -limit)
+            and (n := int(np.count_nonzero(np.abs(v) > limit)))}

@@ -179,10 +179,13 @@ class Decoder(FrozenModel):
                              f"{len(self.gains)} gains does not fit population {self.population!r} "
                              f"of shape {dict(shape)}; give one gain per index of a "
                              "population axis", node=self.port)
-        view = [1] * len(axes)
-        view[axes.index(self.gain_axis)] = len(self.gains)
-        g = np.asarray(self.gains, dtype=np.float64).reshape(view)
-        return np.broadcast_to(g, tuple(shape.values())).ravel()
+        sizes = list(shape.values())
+        k = axes.index(self.gain_axis)
+        g = np.asarray(self.gains, dtype=np.float64)
+        # one run of the gain axis (each gain repeated over the axes after it), then that
+        # run repeated over the axes before it: copies with long inner loops
+        run = np.broadcast_to(g[:, None], (len(g), int(np.prod(sizes[k + 1:])))).ravel()
+        return np.tile(run, int(np.prod(sizes[:k])))
 
     @model_validator(mode="after")
     def _finite(self) -> Decoder:

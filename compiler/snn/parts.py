@@ -57,6 +57,13 @@ def split_values(x: np.ndarray, split: PartLayout) -> np.ndarray:
     x = np.asarray(x)
     if split == "none":
         return x
+    if split == "re_im_signed" and x.dtype == np.complex128 and x.flags.c_contiguous:
+        # (re, im) pairs as one float axis: each of the three operations in one call
+        comps = x.reshape(-1).view(np.float64).reshape(*x.shape, 2)
+        out = np.empty((*x.shape, 2, 2), np.float64)  # (component, sign) = the 4 parts
+        np.maximum(comps, 0.0, out=out[..., 0])
+        np.maximum(np.negative(comps), 0.0, out=out[..., 1])
+        return out.reshape(*x.shape, 4)
     # as float64 (a view of complex128 or float64 values, a copy of anything else)
     re, im = np.real(x).astype(np.float64, copy=False), np.imag(x).astype(np.float64, copy=False)
     out = np.empty((*x.shape, 2 if split in ("re_im", "signed") else 4), np.float64)
@@ -84,4 +91,14 @@ def combine_parts(y: np.ndarray, combine: PartLayout) -> np.ndarray:
         return y[..., 0] + 1j * y[..., 1]
     if combine == "signed":
         return y[..., 0] - y[..., 1]
-    return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
+    if y.dtype != np.float64:
+        return (y[..., 0] - y[..., 1]) + 1j * (y[..., 2] - y[..., 3])
+    # a + 1j·b written into one complex array, the same floats: 1j·b is (0·b − 0) + (0 + b)j
+    # and adding a gives (a + 0·b) + (0 + b)j (0·b: a zero of b's sign, NaN for b = ±inf)
+    out = np.empty(y.shape[:-1], np.complex128)
+    re, im = out.real, out.imag
+    np.subtract(y[..., 0], y[..., 1], out=re)
+    np.subtract(y[..., 2], y[..., 3], out=im)
+    np.add(re, np.multiply(im, 0.0), out=re)
+    np.add(im, 0.0, out=im)
+    return out

@@ -23,6 +23,10 @@ from radar.windows import apply_window, window_coefficients
 
 __all__ = ["DFT", "Linear", "Sum", "Window", "WindowKind"]
 
+#: :class:`Linear` matrices as arrays, by the op's identity (kept with the op, so its id is
+#: not reused): a program evaluates the same op every frame.
+_MATRICES: dict[int, tuple[object, np.ndarray]] = {}
+
 WindowKind = Literal["hann", "hamming", "blackman", "rect"]
 
 
@@ -254,9 +258,16 @@ class Linear(Op):
         )
 
     def evaluate(self, node_id: str, args: list, types: list) -> np.ndarray:
-        matrix = np.asarray(self.matrix, dtype=np.float64)
-        if self.matrix_imag is not None:
-            matrix = matrix + 1j * np.asarray(self.matrix_imag, dtype=np.float64)
+        kept = _MATRICES.get(id(self))
+        if kept is None or kept[0] is not self:  # the array of the tuples, once per op
+            matrix = np.asarray(self.matrix, dtype=np.float64)
+            if self.matrix_imag is not None:
+                matrix = matrix + 1j * np.asarray(self.matrix_imag, dtype=np.float64)
+            matrix.flags.writeable = False
+            if len(_MATRICES) >= 64:
+                _MATRICES.clear()
+            kept = _MATRICES[id(self)] = (self, matrix)
+        matrix = kept[1]
         ax = types[0].index(self.axis)
         return np.moveaxis(np.tensordot(matrix, args[0], axes=([1], [ax])), 0, ax)
 
