@@ -38,6 +38,8 @@ import ctypes.util
 import logging
 import sys
 
+from ir.errors import SimulationError
+
 __all__ = ["MMAP_THRESHOLD_BYTES", "TRIM_THRESHOLD_BYTES", "held", "hold_freed_memory"]
 
 _log = logging.getLogger(__name__)
@@ -75,8 +77,6 @@ def hold_freed_memory(mmap_threshold_bytes: int = MMAP_THRESHOLD_BYTES,
         If a threshold is not a whole number of bytes in ``[1, 2**31 - 1]`` (``mallopt``
         takes a C ``int``).
     """
-    from ir.errors import SimulationError
-
     for name, value, default in (
             ("mmap_threshold_bytes", mmap_threshold_bytes, MMAP_THRESHOLD_BYTES),
             ("trim_threshold_bytes", trim_threshold_bytes, TRIM_THRESHOLD_BYTES)):
