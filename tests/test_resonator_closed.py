@@ -302,3 +302,35 @@ def test_compartments_are_re_minus_re_im_minus_im(shape, seed, integer):
     want[..., 1], want[..., 3] = -want[..., 0], -want[..., 2]
     got = _project(z, dt)
     assert got.dtype == dt and got.tobytes() == want.reshape(-1).tobytes()
+
+
+@settings(max_examples=40, deadline=None)
+@given(rows=st.integers(1, 9), k=st.integers(1, 6), p=st.integers(1, 3),
+       n_steps=st.integers(1, 12), block=st.integers(1, 64), shared=st.booleans(),
+       seed=st.integers(0, 2**32 - 1))
+def test_the_replay_block_never_changes_a_bit(rows, k, p, n_steps, block, shared, seed):
+    """Any block size — the cache-sized one, the larger one taken while other threads run,
+    or a row at a time — gives the same bits (the replay is elementwise along the rows)."""
+    import threading
+
+    rng = np.random.default_rng(seed)
+    z = (rng.integers(-500, 500, (rows, k, p))
+         + 1j * rng.integers(-500, 500, (rows, k, p))).astype(np.complex128)
+    a = np.exp(1j * rng.uniform(0, 2 * np.pi, (k, p))) * rng.integers(1000, 4096, (k, p)) / 4096
+    a = np.round(a * 4096) / 4096  # a 12-bit coefficient, divided by 2^F
+    d = (rng.integers(-50, 50, (n_steps, rows, 1 if shared else k, p))
+         + 1j * rng.integers(-50, 50, (n_steps, rows, 1 if shared else k, p)))
+    whole = resonator_closed.replay_rows(z, a, n_steps, d.astype(np.complex128),
+                                         block_entries=rows * k * p)
+    blocked = resonator_closed.replay_rows(z, a, n_steps, d.astype(np.complex128),
+                                           block_entries=block)
+    assert blocked.tobytes() == whole.tobytes()
+    idle = threading.Event()
+    other = threading.Thread(target=idle.wait)  # another thread alive: the shared block
+    other.start()
+    try:
+        picked = resonator_closed.replay_rows(z, a, n_steps, d.astype(np.complex128))
+    finally:
+        idle.set()
+        other.join()
+    assert picked.tobytes() == whole.tobytes()

@@ -17,9 +17,10 @@ A resonator population (:mod:`backends.reference.resonator_closed`) has no such
 product in fixed point: every input step rounds, so a frame needs ``m`` rotations of
 every resonator — ``m`` complex multiplies and roundings of the ``(rows, K, P)`` state
 (``rows``: frames × repetitions), each unavoidable.  Its floor (:func:`rotation_floors`)
-is exactly those rotations, in the closed form's own row blocks (the same numpy
-operations, :func:`~backends.reference.resonator_closed.replay_rows`) with no drive,
-read-out or encoding.  In floating point the span is linear and its floor is the one
+is exactly those rotations, in the closed form's cache-sized row blocks (the same numpy
+operations, :func:`~backends.reference.resonator_closed.replay_rows`, in the blocks it
+takes on a thread of its own: the fastest on one core) with no drive, read-out or
+encoding.  In floating point the span is linear and its floor is the one
 product the closed form applies, the drive ``(rows · P) × m`` times the power table
 ``m × K`` (complex).
 
@@ -56,7 +57,7 @@ import scipy.sparse as sp
 from backends.reference.matrix import MatrixDelivery
 from backends.reference.plan import SimPlan
 from backends.reference.resonator import ResonatorStepParams
-from backends.reference.resonator_closed import input_layout, replay_rows
+from backends.reference.resonator_closed import _BLOCK_ENTRIES, input_layout, replay_rows
 
 __all__ = ["FloorProduct", "RotationFloor", "floor_calls", "floor_products",
            "rotation_floors"]
@@ -141,7 +142,7 @@ class RotationFloor:
         if self.coef_bits:  # whole states well inside the exact range (about 2^20)
             z = (rng.integers(-(1 << 20), 1 << 20, (self.rows, k, p))
                  + 1j * rng.integers(-(1 << 20), 1 << 20, (self.rows, k, p)))
-            return lambda: replay_rows(z, self.coef, self.n_steps)
+            return lambda: replay_rows(z, self.coef, self.n_steps, block_entries=_BLOCK_ENTRIES)
         drive = rng.standard_normal((p, self.rows, self.n_steps)) + 0j
         table = rng.standard_normal((p, self.n_steps, k)) + 0j
         return lambda: np.matmul(drive, table)

@@ -46,6 +46,7 @@ Examples
 
 from __future__ import annotations
 
+import threading
 import weakref
 
 import numpy as np
@@ -63,6 +64,10 @@ __all__ = ["solve_resonators", "replay_rows", "input_layout"]
 _AWAY = 1.0 + 2.0 ** -51
 #: Complex entries of one row block of the replay (about 512 kB: it stays in L2).
 _BLOCK_ENTRIES = 1 << 15
+#: The block when other threads of the process run too (a frames axis on several workers):
+#: every numpy call of the replay hands the interpreter lock to the other thread and back,
+#: so fewer, larger calls (2 MiB blocks) keep the threads busy; the bits are the same.
+_SHARED_BLOCK_ENTRIES = 1 << 17
 #: Resonators × steps of one full drive histogram (a drive not shared along the bins): its
 #: four compartments in float64 take 8 MiB.
 _FULL_ENTRIES = 1 << 18
@@ -183,11 +188,15 @@ def _replay(z: np.ndarray, d: np.ndarray, s0: int, params: ResonatorStepParams,
 
 
 def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | None = None,
-                a_end: np.ndarray | None = None, ends: np.ndarray | None = None) -> np.ndarray:
+                a_end: np.ndarray | None = None, ends: np.ndarray | None = None,
+                block_entries: int | None = None) -> np.ndarray:
     """``n_steps`` fixed-point rotations of ``z`` (``(R, K, P)``, whole values) by ``a``
     (``(K, P)``, already divided by ``2^F``), in row blocks that stay in the cache: per step
     ``z ← rint((z + drive[j])·a·(1 + 2^-51))`` (``a_end`` where ``ends[j]``).  Exact only
-    where :func:`_exact` holds; :mod:`backends.reference.floor` times it without a drive.
+    where :func:`_exact` holds; :mod:`backends.reference.floor` times it without a drive,
+    in the cache-sized blocks.  ``block_entries`` (complex entries per block; the result is
+    the same for any): None picks :data:`_BLOCK_ENTRIES` on a thread of its own and
+    :data:`_SHARED_BLOCK_ENTRIES` while other threads of the process run.
 
     Examples
     --------
@@ -196,7 +205,9 @@ def replay_rows(z: np.ndarray, a: np.ndarray, n_steps: int, drive: np.ndarray | 
     [[[(-1+0j)]]]
     """
     out = np.empty_like(z)
-    rows = max(1, _BLOCK_ENTRIES // (z.shape[1] * z.shape[2]))
+    if block_entries is None:
+        block_entries = _BLOCK_ENTRIES if threading.active_count() == 1 else _SHARED_BLOCK_ENTRIES
+    rows = max(1, block_entries // (z.shape[1] * z.shape[2]))
     coef = [a_end if ends is not None and ends[j] else a for j in range(n_steps)]
     for r0 in range(0, z.shape[0], rows):
         block = z[r0:r0 + rows].copy()
