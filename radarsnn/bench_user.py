@@ -19,7 +19,10 @@ bench's program and frame, each pair of a ratio *in turn* (the bench's
 * what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
   ``workers`` series of plain BLAS products (one thread each) run one after the other and
   side by side, in turn; their ratio ``host_thread_speedup`` is the ceiling of
-  ``workers_speedup`` on this host at this time (1 when other work fills the cores);
+  ``workers_speedup`` on this host at this time for work that stays in the cache (1 when
+  other work fills the cores); ``host_stream_1_thread`` / ``host_stream_n_threads`` and
+  ``host_stream_speedup``, the same for element-wise passes over operands too large for the
+  cache: what the memory lets several cores gain, the ceiling of work bound by it;
 * :func:`time_compile`: ``compile_accuracy_off`` / ``compile_accuracy_on``:
   :func:`radarsnn.compile_graph` of the chain for ``kapoho_point`` on three calibration
   frames, with ``accuracy="off"`` and with the accuracy check (the default).
@@ -50,6 +53,8 @@ GOALS = {"run_program_frame_over_planned": "goal <= 1.2", "workers_speedup": "go
          "system_over_user": "goal <= 0.1", "compile_accuracy_on_over_off": "goal <= 2"}
 #: Frames on the frames axis timed.
 N_FRAMES = 8
+#: float64 entries of each operand of the host's streaming passes (16 MiB: past the caches).
+STREAM_ENTRIES = 1 << 21
 #: The target the compile figures are measured for (the README's quick start).
 COMPILE_TARGET = "kapoho_point"
 
@@ -95,24 +100,36 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
 
 
 def _host_threads(workers: int, repeats: int, medians: Medians) -> dict[str, float]:
-    """Seconds of ``workers`` series of BLAS products one after the other and on threads."""
+    """Seconds of ``workers`` series of BLAS products, and of ``workers`` series of streaming
+    element-wise passes, one after the other and on threads."""
     import threading
 
     a = np.random.default_rng(0).random((512, 512))
+    streams = [(np.ones(STREAM_ENTRIES), np.empty(STREAM_ENTRIES)) for _ in range(workers)]
 
-    def series() -> None:
+    def products(_k: int = 0) -> None:  # compute-bound: the operands stay in the cache
         for _ in range(8):
             a @ a
 
-    def side_by_side() -> None:
-        threads = [threading.Thread(target=series) for _ in range(workers)]
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
+    def passes(k: int = 0) -> None:  # memory-bound: 16 MiB operands, read and written
+        x, y = streams[k]
+        for _ in range(8):
+            np.multiply(x, 1.0, out=y)
+            np.add(y, x, out=x)
 
-    return medians({"host_blas_1_thread": lambda: [series() for _ in range(workers)],
-                     "host_blas_n_threads": side_by_side}, repeats)
+    def side_by_side(series: Callable[[int], None]) -> Callable[[], None]:
+        def run() -> None:
+            threads = [threading.Thread(target=series, args=(k,)) for k in range(workers)]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+        return run
+
+    return medians({"host_blas_1_thread": lambda: [products() for _ in range(workers)],
+                    "host_blas_n_threads": side_by_side(products),
+                    "host_stream_1_thread": lambda: [passes(k) for k in range(workers)],
+                    "host_stream_n_threads": side_by_side(passes)}, repeats)
 
 
 def time_compile(graph, calibration: np.ndarray, repeats: int, report,
@@ -146,6 +163,7 @@ def user_path_ratios(user_path: dict[str, float], cpu: dict[str, float]) -> dict
     pairs = {"run_program_frame_over_planned": ("run_program_frame", "run_program_frame_planned"),
              "workers_speedup": ("frames_axis_1_worker", "frames_axis_n_workers"),
              "host_thread_speedup": ("host_blas_1_thread", "host_blas_n_threads"),
+             "host_stream_speedup": ("host_stream_1_thread", "host_stream_n_threads"),
              "compile_accuracy_on_over_off": ("compile_accuracy_on", "compile_accuracy_off")}
     for name, (a, b) in pairs.items():
         if user_path.get(a) and user_path.get(b):
