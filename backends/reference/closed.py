@@ -26,7 +26,7 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import synapses_per_source
-from backends.reference.encoding import StreamTrain, Train
+from backends.reference.trains import StreamTrain, Train
 from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps

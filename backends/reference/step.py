@@ -46,7 +46,7 @@ from backends.reference.delivery import (
     add_current,
     synapses_per_source,
 )
-from backends.reference.encoding import Train
+from backends.reference.trains import Train
 from backends.reference.live_neurons import LiveNeurons
 from backends.reference.plan import SimPlan
 from backends.reference.resonator import LiveResonators, ResonatorStepParams
