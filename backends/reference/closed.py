@@ -26,7 +26,6 @@ import networkx as nx
 import numpy as np
 
 from backends.reference.delivery import synapses_per_source
-from backends.reference.trains import StreamTrain, Train
 from backends.reference.fired import Fired
 from backends.reference.gate import is_gated_span, solve_gated
 from backends.reference.order import first_spike_steps
@@ -35,6 +34,7 @@ from backends.reference.resonator import ResonatorStepParams
 from backends.reference.resonator_closed import solve_resonators
 from backends.reference.result import Activity, LazyArrays
 from backends.reference.spans import Arrivals, charge, driven, silent
+from backends.reference.trains import StreamTrain, Train
 
 __all__ = ["closed_form_problems", "run_closed", "BLOCK_BYTES"]
 

@@ -46,11 +46,11 @@ from backends.reference.delivery import (
     add_current,
     synapses_per_source,
 )
-from backends.reference.trains import Train
 from backends.reference.live_neurons import LiveNeurons
 from backends.reference.plan import SimPlan
 from backends.reference.resonator import LiveResonators, ResonatorStepParams
 from backends.reference.result import Activity
+from backends.reference.trains import Train
 
 __all__ = ["run_step"]
 
