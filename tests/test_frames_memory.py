@@ -179,3 +179,16 @@ def test_a_progress_callback_that_raises_stops_the_frames_not_started():
     with pytest.raises(KeyError, match="stop"):
         map_frames(run, 50, 2, progress)
     assert len(ran) <= 3 and len(ran) == len(set(ran))  # the helper stopped taking frames
+
+
+def test_lazy_arrays_reach_a_worker_process_as_a_plain_dict():
+    """A forked worker sends its light results through a pipe (pickled): a lazy mapping
+    goes as the dict of its arrays, every lazy value computed."""
+    import pickle
+
+    from backends.reference.result import LazyArrays
+
+    lazy = LazyArrays({"a": np.arange(3), "b": lambda: np.ones(2, np.int16)})
+    back = pickle.loads(pickle.dumps(lazy))
+    assert type(back) is dict and sorted(back) == ["a", "b"]
+    assert back["a"].tolist() == [0, 1, 2] and back["b"].dtype == np.int16

@@ -47,7 +47,8 @@ def first_steps(first: np.ndarray, n_steps: int, shape: tuple[int, ...]) -> np.n
 class LazyArrays(Mapping):
     """A read-only mapping whose values are arrays or zero-argument functions computing them;
     a function is called on first access and its array kept (values nobody reads, such as a
-    stream source's per-neuron first spikes, cost nothing).  Pickles as a plain dict.
+    stream source's per-neuron first spikes, cost nothing).  Copied and pickled as a plain
+    dict of arrays.
 
     Examples
     --------
@@ -57,8 +58,8 @@ class LazyArrays(Mapping):
     (['a', 'b'], [])
     >>> m["b"].tolist(), m["b"].shape, calls
     ([1.0, 1.0, 1.0], (3,), [1])
-    >>> import pickle
-    >>> type(pickle.loads(pickle.dumps(m))).__name__
+    >>> import copy
+    >>> type(copy.deepcopy(m)).__name__  # copied (and sent to a worker process) as a dict
     'dict'
     """
 
