@@ -26,7 +26,18 @@ from typing import IO
 
 from tqdm import tqdm
 
-__all__ = ["ProgressBar", "make_progress"]
+__all__ = ["ProgressBar", "bar_without_thread", "make_progress"]
+
+
+class bar_without_thread(tqdm):  # noqa: N801 - used as tqdm is, a callable bar
+    """A :class:`tqdm.tqdm` bar that starts no monitor thread.
+
+    tqdm's monitor thread only shortens the refresh of a stalled bar; without it the
+    process keeps running no other thread, which is what lets a frames axis fork its
+    worker processes safely (:func:`backends.reference.frames_run.resolve_parallel`).
+    """
+
+    monitor_interval = 0
 
 
 class ProgressBar:
@@ -44,9 +55,10 @@ class ProgressBar:
 
     def __init__(self, total: int | None = None, desc: str = "", file: IO[str] | None = None):
         self._label = desc
-        self._bar = tqdm(total=total, desc=desc, file=file or sys.stderr, leave=False,
-                         disable=None if file is None else False,  # None: no bar off a terminal
-                         dynamic_ncols=True, bar_format="[{elapsed}] {n_fmt}/{total_fmt} {desc}")
+        self._bar = bar_without_thread(
+            total=total, desc=desc, file=file or sys.stderr, leave=False,
+            disable=None if file is None else False,  # None: no bar off a terminal
+            dynamic_ncols=True, bar_format="[{elapsed}] {n_fmt}/{total_fmt} {desc}")
 
     def __call__(self, stage: str, message: str) -> None:
         self._bar.set_description_str(f"{self._label}: {stage} {message}", refresh=False)

@@ -14,7 +14,8 @@ bench's program and frame, each pair of a ratio *in turn* (the bench's
   ``n_frames`` frames stacked on a leading axis, with ``workers=1`` and with one thread
   per available core (``workers``), of the kind ``run_program`` uses by default
   (``parallel``: :func:`backends.reference.frames_run.default_parallel`);
-* the user and system CPU seconds of the frames-axis timings (``resource.getrusage``:
+* the user and system CPU seconds of the frames-axis timings, worker processes included
+  (``resource.getrusage`` and :func:`~backends.reference.frames_pool.workers_cpu_s`:
   system time is mostly page faults);
 * what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
   ``workers`` series of plain BLAS products (one thread each) run one after the other and
@@ -60,8 +61,14 @@ COMPILE_TARGET = "kapoho_point"
 
 
 def _cpu() -> tuple[float, float]:
+    """User and system CPU seconds of this process and of its worker processes, live
+    (:func:`~backends.reference.frames_pool.workers_cpu_s`) or ended."""
+    from backends.reference.frames_pool import workers_cpu_s
+
     r = resource.getrusage(resource.RUSAGE_SELF)
-    return r.ru_utime, r.ru_stime
+    c = resource.getrusage(resource.RUSAGE_CHILDREN)
+    user, system = workers_cpu_s()
+    return r.ru_utime + c.ru_utime + user, r.ru_stime + c.ru_stime + system
 
 
 def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int, report,

@@ -5,7 +5,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from backends.reference.frames_fork import private_empty
+from backends.reference.frames_memory import private_empty
 from backends.reference.frames_run import FrameStack
 from backends.reference.result import first_step_dtype, first_steps
 

@@ -247,7 +247,7 @@ def test_threads_running_one_new_network_build_its_plan_once(monkeypatch):
 @settings(max_examples=8, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 5), workers=st.sampled_from([2, 3]))
 def test_frames_on_processes_give_the_bits_of_one_thread(seed, n, workers):
-    from backends.reference.frames_fork import fork_available
+    from backends.reference.frames_memory import fork_available
 
     if not fork_available():  # threads there: the same bits, tested above
         return
@@ -273,7 +273,7 @@ def test_a_frame_failing_in_a_process_raises_its_own_error_here():
     assert str(forked.value) == str(alone.value)
 
 
-def test_parallel_must_be_threads_or_processes():
-    with pytest.raises(SimulationError, match=r"parallel='gpu' is not one of \('threads', "
-                                              r"'processes'\)"):
+def test_parallel_must_be_auto_threads_or_processes():
+    with pytest.raises(SimulationError, match=r"parallel='gpu' is not one of \('auto', "
+                                              r"'threads', 'processes'\)"):
         run_program(PROGRAM, {"adc": _frames(0, 2)}, options=RunOptions(parallel="gpu"))

@@ -6,7 +6,7 @@ bit, whatever the number of workers), and its values are copied straight into on
 ``(F, *shape)`` array per node, allocated when the first frame is done: no per-frame
 result is kept until the end and then stacked, so the frames' temporaries are freed and
 reused frame after frame instead of paged in anew.  The stacked arrays have a memory
-mapping of their own (:func:`~backends.reference.frames_fork.private_empty`), outside
+mapping of their own (:func:`~backends.reference.frames_memory.private_empty`), outside
 ``malloc``'s heap, so they do not change how it recycles the frames' temporaries.
 
 With ``workers > 1`` the frames are shared out to that many threads (each takes the
@@ -36,13 +36,14 @@ from typing import TypeVar
 
 import numpy as np
 
-from backends.reference.frames_fork import fork_available, private_empty, shared_empty
+from backends.reference.frames_memory import fork_available, private_empty
+from backends.reference.frames_pool import has_workers
 from backends.reference.result import SimResult
 from backends.reference.run_options import RunOptions
 from ir.errors import SimulationError
 
 __all__ = ["FrameStack", "SimStack", "available_cores", "default_parallel", "map_frames",
-           "resolve_workers"]
+           "resolve_parallel", "resolve_workers"]
 
 T = TypeVar("T")
 
@@ -63,17 +64,37 @@ def resolve_workers(workers: int | None, count: int) -> int:
 
 
 def default_parallel() -> str:
-    """What the workers of a frames axis are when the caller does not say: the default
-    :attr:`~backends.reference.run_options.RunOptions.parallel`, or ``"threads"`` where the
-    system cannot fork (what ``radarsnn bench`` reports as ``parallel``).
+    """What the workers of a frames axis are when the caller does not say
+    (``RunOptions(parallel="auto")``, what ``radarsnn bench`` reports as ``parallel``):
+    :func:`resolve_parallel` of ``"auto"`` in this process now.
 
     Examples
     --------
     >>> default_parallel() in ("threads", "processes")
     True
     """
-    kind = RunOptions().parallel
-    return kind if kind == "threads" or fork_available() else "threads"
+    return resolve_parallel(RunOptions().parallel, 2)
+
+
+def resolve_parallel(parallel: str, workers: int, program: object = None) -> str:
+    """``"threads"`` or ``"processes"``: what ``workers`` workers of a frames axis are.
+
+    ``"auto"`` takes processes (:mod:`backends.reference.frames_pool`) where the system can
+    fork and forking is safe — this process runs no other thread, whose locks a forked
+    copy could inherit held, or ``program`` already has its worker processes — and threads
+    otherwise; ``"processes"`` takes them wherever the system can fork.  One worker is
+    always the calling thread.
+
+    Examples
+    --------
+    >>> resolve_parallel("threads", 4), resolve_parallel("processes", 1)
+    ('threads', 'threads')
+    """
+    if workers <= 1 or parallel == "threads" or not fork_available():
+        return "threads"
+    if parallel == "processes" or threading.active_count() == 1:
+        return "processes"
+    return "processes" if program is not None and has_workers(program) else "threads"
 
 
 class FrameStack:
@@ -83,14 +104,10 @@ class FrameStack:
     ----------
     count : int
         The number of frames.
-    shared : bool
-        Allocate the arrays in shared memory, for forked workers to write their rows
-        (:mod:`backends.reference.frames_fork`).
     """
 
-    def __init__(self, count: int, shared: bool = False) -> None:
+    def __init__(self, count: int) -> None:
         self.count = count
-        self.shared = shared
         self._arrays: dict[str, np.ndarray] | None = None
         self._keys: list[str] | None = None
         self._lock = threading.Lock()
@@ -105,8 +122,8 @@ class FrameStack:
         """
         with self._lock:
             if self._arrays is None:
-                empty = shared_empty if self.shared else private_empty
-                self._arrays = {k: empty((self.count, *np.shape(v)), np.asarray(v).dtype)
+                self._arrays = {k: private_empty((self.count, *np.shape(v)),
+                                                 np.asarray(v).dtype)
                                 for k, v in values.items()}
                 self._keys = list(values)
         arrays = self._arrays
@@ -140,9 +157,8 @@ class SimStack:
     is put; only the counts stay per frame until :meth:`results`.
     """
 
-    def __init__(self, count: int, shared: bool = False) -> None:
+    def __init__(self, count: int) -> None:
         self.count = count
-        self.shared = shared
         self._light: list[Sequence[SimResult] | None] = [None] * count
         self._stacks: dict[int, tuple[FrameStack, FrameStack, FrameStack]] = {}
         self._rasters: list[bool] = []
@@ -158,7 +174,7 @@ class SimStack:
         values given there, as the one-frame result shares the array.
         """
         with self._lock:
-            stacks = [self._stacks.setdefault(k, tuple(FrameStack(self.count, self.shared)
+            stacks = [self._stacks.setdefault(k, tuple(FrameStack(self.count)
                                                        for _ in range(3)))
                       for k in range(len(sims))]
         shared = [[p for p, v in s.outputs.items() if values is not None and values.get(p) is v]
@@ -175,14 +191,6 @@ class SimStack:
             self._rasters = [s.spikes is not None for s in sims]
             self._outputs = [(list(s.outputs), set(same)) for s, same in zip(sims, shared,
                                                                             strict=True)]
-
-    def light(self, index: int) -> Sequence[SimResult] | None:
-        """Frame ``index``'s results without their arrays (what a forked worker sends back)."""
-        return self._light[index]
-
-    def set_light(self, index: int, light: Sequence[SimResult] | None) -> None:
-        """Take frame ``index``'s :meth:`light` results from a worker."""
-        self._light[index] = light
 
     def results(self, values: Mapping[str, np.ndarray] | None = None) -> list[SimResult]:
         """One result per segment over every frame (``values``: the stacked values whose

@@ -27,8 +27,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from backends.reference.engine import REFERENCE, SegmentEngine
-from backends.reference.frames_fork import fork_available, map_frames_forked
-from backends.reference.frames_run import FrameStack, SimStack, map_frames, resolve_workers
+from backends.reference.frames_pool import map_frames_pooled, pool_key
+from backends.reference.frames_run import (
+    FrameStack,
+    SimStack,
+    map_frames,
+    resolve_parallel,
+    resolve_workers,
+)
 from backends.reference.guards import MAX_MEMORY_BYTES, MAX_TIME_S
 from backends.reference.input_range import DEFAULT_POLICY, check_policy
 from backends.reference.plan import SimPlan, build_plan
@@ -361,20 +367,21 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
                 progress: Callable[[int, int], None] | None, options: RunOptions, *,
                 plans: list[SimPlan] | None, engine: SegmentEngine) -> ProgramResult:
     """:func:`run_program` frame by frame on ``options.workers`` processes or threads, into
-    stacked values (:mod:`backends.reference.frames_run`, :mod:`~.frames_fork`)."""
+    stacked values (:mod:`backends.reference.frames_run`, :mod:`~.frames_pool`)."""
     limit = options.max_memory_bytes
     per_frame = replace(options, max_memory_bytes=None if limit is None else
                         max(1, int(limit) // count), workers=1)
     where = f"program {program.graph.name!r}"
     workers = resolve_workers(options.workers, count)
-    forked = workers > 1 and options.parallel == "processes" and fork_available()
-    values, peaks, sims = FrameStack(count, forked), FrameStack(count, forked), SimStack(count,
-                                                                                       forked)
+    values, peaks, sims = FrameStack(count), FrameStack(count), SimStack(count)
     normalized: list[list[str]] = [[]]
 
-    def run(i: int) -> None:
-        result = run_program(program, frame(inputs, i), plans=plans, options=per_frame,
-                             engine=engine)
+    def run_one(frame_inputs: Mapping[str, np.ndarray], frame_options: RunOptions
+                ) -> ProgramResult:
+        return run_program(program, frame_inputs, plans=plans, options=frame_options,
+                           engine=engine)
+
+    def store(i: int, result: ProgramResult) -> None:
         values.put(i, result.values, where=where)
         if result.input_peaks:
             peaks.put(i, result.input_peaks, where=where)
@@ -382,11 +389,15 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
         if i == 0:
             normalized[0] = result.normalized
 
-    if forked:
-        map_frames_forked(run, count, workers, progress, collect=sims.light,
-                          apply=sims.set_light)
-    else:
-        map_frames(run, count, workers, progress)
+    def inputs_of(i: int) -> dict[str, np.ndarray]:
+        return frame(inputs, i)
+
+    kind = resolve_parallel(options.parallel, workers, program)
+    if kind != "processes" or not map_frames_pooled(
+            program, pool_key(program, engine, plans), run_one, count, workers, inputs_of,
+            per_frame, store, progress):  # threads (also while another thread has the pool)
+        map_frames(lambda i: store(i, run_one(inputs_of(i), per_frame)), count, workers,
+                   progress)
     stacked = values.arrays()
     return ProgramResult(
         values=stacked, outputs={k: stacked[k] for k in program.graph.output_ids()},

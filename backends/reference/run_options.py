@@ -39,7 +39,7 @@ MODES = (*ENGINE_MODES, "auto")
 #: Number types of currents and membranes.
 ARITHMETICS = ("float64", "int64")
 #: What the workers of a frames axis are (:attr:`RunOptions.parallel`).
-PARALLEL = ("threads", "processes")
+PARALLEL = ("auto", "threads", "processes")
 
 
 @dataclass(frozen=True)
@@ -65,11 +65,14 @@ class RunOptions:
         any number); None: one per core the process may use.  A single frame, and
         :func:`~backends.reference.simulate` (which batches its frames itself), run on
         the calling thread.
-    parallel : {"threads", "processes"}
-        What the workers are: threads of this process (the default: on a shared 2-core
-        host they gained more than processes, which pay for the fork and its
-        copy-on-write faults), or forked processes writing into shared memory
-        (:mod:`backends.reference.frames_fork`; threads where the system cannot fork).
+    parallel : {"auto", "threads", "processes"}
+        What the workers are: threads of this process, or worker processes forked once
+        and kept for the program's next runs, which exchange frames through shared
+        memory (:mod:`backends.reference.frames_pool`; threads where the system cannot
+        fork).  ``auto`` (the default) takes processes where forking is safe — no other
+        thread runs in this process — and threads otherwise
+        (:func:`~backends.reference.frames_run.resolve_parallel`): a frame keeps the
+        interpreter lock for part of its time, which threads cannot share.
     """
 
     mode: str = "auto"
@@ -79,7 +82,7 @@ class RunOptions:
     max_memory_bytes: int | None = MAX_MEMORY_BYTES
     max_time_s: float | None = MAX_TIME_S
     workers: int | None = None
-    parallel: Literal["threads", "processes"] = "threads"
+    parallel: Literal["auto", "threads", "processes"] = "auto"
 
     def checked(self, where: str) -> RunOptions:
         """This record, its engine, arithmetic and limits checked (errors name ``where``).

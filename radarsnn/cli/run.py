@@ -106,10 +106,11 @@ def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_rang
     if count is None or args.quiet or args.json:
         return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
                            workers=args.workers)
-    from tqdm import tqdm
+    from compiler.progress import bar_without_thread
 
-    with tqdm(total=count, desc="run", unit="frame", file=sys.stderr, leave=False,
-              disable=None, dynamic_ncols=True) as bar:  # disable=None: no bar off a terminal
+    with bar_without_thread(total=count, desc="run", unit="frame", file=sys.stderr,
+                            leave=False, disable=None,  # None: no bar off a terminal
+                            dynamic_ncols=True) as bar:
         return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
                            progress=lambda done, total: bar.update(1), workers=args.workers)
 

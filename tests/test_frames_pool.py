@@ -1,0 +1,209 @@
+"""Worker processes kept between calls (:mod:`backends.reference.frames_pool`).
+
+* the frames of a program run on the pool give the bits of one thread, call after call, on
+  the same worker processes; a changed part of the program, another program or another
+  number of workers forks new ones;
+* a result too large for the slots, arrays of Python objects, a worker that dies and a
+  frame that raises all give the frames' own results or errors, in frame order;
+* the pool ends with its program, with :func:`close_frame_workers`, and after Ctrl-C;
+* ``auto`` takes processes only where forking is safe.
+"""
+
+from __future__ import annotations
+
+import gc
+import os
+import threading
+
+import numpy as np
+import pytest
+
+from backends.reference import RunOptions, run_program
+from backends.reference.frames_memory import fork_available
+from backends.reference.frames_pool import (
+    _CURRENT,
+    close_frame_workers,
+    has_workers,
+    map_frames_pooled,
+    pool_key,
+    workers_cpu_s,
+)
+from backends.reference.frames_run import resolve_parallel
+from backends.reference.program import ProgramResult
+from compiler.compile import compile_graph
+from tests.test_run_program_speed import _frames, _rd_chain, _same_run, _same_sims
+
+pytestmark = pytest.mark.skipif(not fork_available(), reason="worker processes need fork "
+                                 "(elsewhere frames run on threads, tested with them)")
+ON_PROCESSES = RunOptions(out_of_range="clip", workers=2, parallel="processes")
+
+
+@pytest.fixture
+def program():
+    yield compile_graph(_rd_chain(), target=None, calibration_inputs={"adc": _frames(0, 3)})
+    close_frame_workers()
+
+
+def _pids() -> list[int]:
+    pool = _CURRENT[0]
+    return [] if pool is None else [c.pid for c in pool.children]
+
+
+def _check(program, x: np.ndarray) -> None:
+    got = run_program(program, {"adc": x}, options=ON_PROCESSES)
+    one = run_program(program, {"adc": x}, out_of_range="clip", workers=1)
+    _same_run(got, one)
+    _same_sims(got.simulations, one.simulations)
+
+
+def test_calls_reuse_the_workers_and_give_the_bits_of_one_thread(program):
+    _check(program, _frames(1, 5))
+    pids = _pids()
+    assert len(pids) == 2 and has_workers(program)
+    for seed, n in ((2, 6), (3, 2), (4, 9)):
+        _check(program, _frames(seed, n))
+        assert _pids() == pids  # the same processes: forked once
+
+
+def test_a_changed_part_another_program_or_workers_fork_new_workers(program):
+    _check(program, _frames(1, 4))
+    first = _pids()
+    program.networks[0].n_steps += 4  # a changed part: the workers' copy is stale
+    _check(program, _frames(2, 4))
+    second = _pids()
+    assert set(second).isdisjoint(first)
+    run_program(program, {"adc": _frames(2, 4)}, options=RunOptions(
+        out_of_range="clip", workers=3, parallel="processes"))
+    assert len(_pids()) == 3
+    other = compile_graph(_rd_chain(), target=None, calibration_inputs={"adc": _frames(5, 3)})
+    _check(other, _frames(3, 4))
+    assert not has_workers(program) and has_workers(other)
+
+
+def test_the_pool_ends_with_its_program_and_when_closed(program):
+    run_program(program, {"adc": _frames(1, 3)}, options=ON_PROCESSES)
+    children = list(_CURRENT[0].children)
+    assert close_frame_workers() and not close_frame_workers()
+    assert not any(c.is_alive() for c in children)
+    other = compile_graph(_rd_chain(), target=None, calibration_inputs={"adc": _frames(5, 3)})
+    run_program(other, {"adc": _frames(1, 3)}, options=ON_PROCESSES)
+    children = list(_CURRENT[0].children)
+    del other
+    gc.collect()
+    for c in children:
+        c.join(timeout=5)
+    assert not any(c.is_alive() for c in children)
+
+
+def test_workers_cpu_time_is_counted(program):
+    x = _frames(1, 8)
+    run_program(program, {"adc": x}, options=ON_PROCESSES)
+    before = sum(workers_cpu_s())
+    for _ in range(20):
+        run_program(program, {"adc": x}, options=ON_PROCESSES)
+    assert sum(workers_cpu_s()) > before
+
+
+def test_ctrl_c_in_progress_ends_the_pool_and_the_next_call_works(program):
+    def interrupt(done, total):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    run_program(program, {"adc": _frames(1, 3)}, options=ON_PROCESSES)
+    children = list(_CURRENT[0].children)
+    with pytest.raises(KeyboardInterrupt):
+        run_program(program, {"adc": _frames(1, 6)}, options=ON_PROCESSES, progress=interrupt)
+    assert _CURRENT[0] is None and not any(c.is_alive() for c in children)
+    _check(program, _frames(2, 5))
+
+
+def test_a_dead_worker_frames_run_here(program):
+    run_program(program, {"adc": _frames(1, 3)}, options=ON_PROCESSES)
+    pool = _CURRENT[0]
+    pool.children[0].kill()
+    pool.children[0].join()
+    _check(program, _frames(2, 5))  # a new pool: the old one has a dead worker
+    assert pool.children[0].pid not in _pids()
+
+
+# -- the pool on its own: toy frames whose results outgrow slots, hold objects, or fail
+
+
+class Toy:
+    """A program stand-in: the pool needs only an object to key and hold weakly."""
+
+
+def _toy_run(sizes: dict[int, int], fail: set[int] = frozenset(), die: set[int] = frozenset(),
+             objects: bool = False):
+    def run_one(inputs, options):
+        i = int(inputs["i"][0])
+        if i in die and os.getpid() != PARENT:
+            os._exit(3)
+        if i in fail:
+            raise ValueError(f"frame {i} fails")
+        x = np.full(sizes.get(i, 4), float(i))
+        v = {"x": x, "i": inputs["i"]}
+        if objects:
+            v["o"] = np.array([f"frame {i}"], dtype=object)
+        return ProgramResult(values=v, outputs={"x": x})
+    return run_one
+
+
+PARENT = os.getpid()
+
+
+def _toy_map(run_one, count: int) -> dict[int, ProgramResult]:
+    toy = Toy()
+    got = {}
+
+    def store(i, result):
+        got[i] = {k: np.array(v, copy=True) for k, v in result.values.items()}
+        assert result.outputs["x"] is result.values["x"]
+
+    seen = []
+    assert map_frames_pooled(toy, pool_key(toy, None, None), run_one, count, 2,
+                             lambda i: {"i": np.array([i])}, None, store,
+                             lambda done, total: seen.append(done))
+    assert seen == list(range(1, count + 1))
+    close_frame_workers()
+    return got
+
+
+def test_a_result_that_outgrows_the_slots_forks_larger_ones():
+    sizes = {0: 4, 3: 1 << 19, 5: 1 << 21}  # 4 MiB and 16 MiB of float64: past the slots
+    got = _toy_map(_toy_run(sizes), 7)
+    assert sorted(got) == list(range(7))
+    for i, v in got.items():
+        assert v["x"].shape == (sizes.get(i, 4),) and (v["x"] == i).all()
+
+
+def test_arrays_of_python_objects_come_through_the_pipe():
+    got = _toy_map(_toy_run({}, objects=True), 5)
+    assert [got[i]["o"].tolist() for i in range(5)] == [[f"frame {i}"] for i in range(5)]
+
+
+def test_a_worker_that_dies_leaves_its_frame_to_the_parent():
+    got = _toy_map(_toy_run({}, die={2, 4}), 6)
+    assert sorted(got) == list(range(6))
+
+
+def test_the_earliest_failing_frame_raises_here():
+    with pytest.raises(ValueError, match="frame 3 fails"):
+        _toy_map(_toy_run({}, fail={3, 5}), 8)
+    close_frame_workers()
+
+
+def test_auto_takes_processes_only_where_forking_is_safe(program):
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:  # another thread: its locks could be copied held, so threads
+        assert resolve_parallel("auto", 2, program) == "threads"
+        assert resolve_parallel("processes", 2, program) == "processes"
+        run_program(program, {"adc": _frames(1, 3)}, options=ON_PROCESSES)
+        # workers already forked for this program: they are used, nothing is forked
+        assert resolve_parallel("auto", 2, program) == "processes"
+        assert resolve_parallel("auto", 1, program) == "threads"
+    finally:
+        stop.set()
+        other.join()
