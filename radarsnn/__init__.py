@@ -43,6 +43,7 @@ HOMES: dict[str, tuple[str, ...]] = {
     "backends": ("load", "load_program", "save", "save_program"),
     "backends.reference": ("run_program", "simulate"),
     "backends.reference.accuracy": ("check_accuracy",),
+    "backends.reference.frames_pool": ("close_frame_workers",),
     "backends.reference.heap": ("hold_freed_memory",),
     "compiler.program": ("CompiledProgram",),
     "ir": ("Graph", "evaluate"),

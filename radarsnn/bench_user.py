@@ -11,16 +11,20 @@ bench's program and frame, each pair of a ratio *in turn* (the bench's
   ``run_program_frame_planned``: the bench's own call (``mode="closed"``, ``plans=`` given);
   ``run_program_first_call``: the very first call, plans built (one run, not a median);
 * ``frames_axis_1_worker`` / ``frames_axis_n_workers``: seconds per frame of one call on
-  ``n_frames`` frames stacked on a leading axis, with ``workers=1`` and with one thread
+  ``n_frames`` frames stacked on a leading axis, with ``workers=1`` and with one worker
   per available core (``workers``), of the kind ``run_program`` uses by default
-  (``parallel``: :func:`backends.reference.frames_run.default_parallel`);
-* the user and system CPU seconds of the frames-axis timings, worker processes included
-  (``resource.getrusage`` and :func:`~backends.reference.frames_pool.workers_cpu_s`:
-  system time is mostly page faults);
+  (``parallel``: :func:`backends.reference.frames_run.default_parallel`), and
+  ``frames_axis_n_threads``: the same workers as threads (``parallel="threads"``), all
+  three in turn;
+* the user and system CPU seconds of the first two (``cpu.user_s``, ``cpu.system_s``) and
+  of the threads (``cpu.threads_user_s``, ``cpu.threads_system_s``), worker processes
+  included (``resource.getrusage`` and
+  :func:`~backends.reference.frames_pool.workers_cpu_s`: system time is mostly page
+  faults);
 * what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
   ``workers`` series of plain BLAS products (one thread each) run one after the other and
-  side by side, in turn; their ratio ``host_thread_speedup`` is the ceiling of
-  ``workers_speedup`` on this host at this time for work that stays in the cache (1 when
+  side by side, in turn; their ratio ``host_thread_speedup`` is what a second core gives
+  on this host at this time to work that stays in the cache (1 when
   other work fills the cores); ``host_stream_1_thread`` / ``host_stream_n_threads`` and
   ``host_stream_speedup``, the same for element-wise passes over operands too large for the
   cache: what the memory lets several cores gain, the ceiling of work bound by it;
@@ -94,15 +98,30 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     report.workers, report.n_frames_axis = workers, len(frames)
     report.parallel = default_parallel()
     report.freed_memory_held = held() is not None
-    user, system = _cpu()
+    spent: dict[str, np.ndarray] = {}
+
+    def counted(kind: str, run: Callable[[], object]) -> Callable[[], object]:
+        def call() -> object:  # each series' own CPU seconds, however the calls interleave
+            before = np.array(_cpu())
+            try:
+                return run()
+            finally:
+                spent[kind] = spent.get(kind, 0.0) + np.array(_cpu()) - before
+        return call
+
     per_call = medians({
-        "frames_axis_1_worker": lambda: run_program(program, stacked, out_of_range="clip",
-                                                    workers=1),
-        "frames_axis_n_workers": lambda: run_program(program, stacked, out_of_range="clip",
-                                                     workers=workers)}, repeats)
-    user2, system2 = _cpu()
+        "frames_axis_1_worker": counted("default", lambda: run_program(
+            program, stacked, out_of_range="clip", workers=1)),
+        "frames_axis_n_workers": counted("default", lambda: run_program(
+            program, stacked, out_of_range="clip", workers=workers)),
+        "frames_axis_n_threads": counted("threads", lambda: run_program(
+            program, stacked, out_of_range="clip", workers=workers, parallel="threads"))},
+        repeats)
     report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
-    report.cpu.update({"user_s": user2 - user, "system_s": system2 - system})
+    user, system = spent.get("default", np.zeros(2))
+    report.cpu.update({"user_s": float(user), "system_s": float(system)})
+    user, system = spent.get("threads", np.zeros(2))
+    report.cpu.update({"threads_user_s": float(user), "threads_system_s": float(system)})
     report.user_path.update(_host_threads(workers, repeats, medians))
 
 
@@ -169,6 +188,7 @@ def user_path_ratios(user_path: dict[str, float], cpu: dict[str, float]) -> dict
     out = {}
     pairs = {"run_program_frame_over_planned": ("run_program_frame", "run_program_frame_planned"),
              "workers_speedup": ("frames_axis_1_worker", "frames_axis_n_workers"),
+             "threads_speedup": ("frames_axis_1_worker", "frames_axis_n_threads"),
              "host_thread_speedup": ("host_blas_1_thread", "host_blas_n_threads"),
              "host_stream_speedup": ("host_stream_1_thread", "host_stream_n_threads"),
              "compile_accuracy_on_over_off": ("compile_accuracy_on", "compile_accuracy_off")}
@@ -195,6 +215,9 @@ def user_path_lines(report) -> list[str]:
     if report.cpu:
         lines.append(f"  frames-axis CPU: user {report.cpu['user_s']:.2f} s, system "
                      f"{report.cpu['system_s']:.2f} s")
+        if "threads_user_s" in report.cpu:
+            lines.append(f"  frames-axis CPU on threads: user {report.cpu['threads_user_s']:.2f}"
+                         f" s, system {report.cpu['threads_system_s']:.2f} s")
     for k, v in user_path_ratios(report.user_path, report.cpu).items():
         lines.append(f"  {k:<32} {v:>8.2f}  {GOALS.get(k, '')}")
     return lines

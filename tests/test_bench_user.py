@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 
+from backends.reference.frames_run import default_parallel
 from compiler.compile import compile_graph
 from ir import Graph
 from radarsnn.bench import BenchReport, interleaved_medians
@@ -40,14 +41,17 @@ def test_the_user_path_is_timed_and_its_ratios_are_the_figures():
     time_compile(_chain(), frames[1:4], 1, report, interleaved_medians)
     assert set(report.user_path) == {
         "run_program_first_call", "run_program_frame", "run_program_frame_planned",
-        "frames_axis_1_worker", "frames_axis_n_workers", "host_blas_1_thread",
+        "frames_axis_1_worker", "frames_axis_n_workers", "frames_axis_n_threads",
+        "host_blas_1_thread",
         "host_blas_n_threads", "host_stream_1_thread", "host_stream_n_threads",
         "compile_accuracy_off", "compile_accuracy_on"}, report.notes
     assert report.workers >= 1 and report.n_frames_axis == 4
-    assert report.parallel == "threads"  # run_program's default, reported as run
-    assert set(report.cpu) == {"user_s", "system_s"} and report.cpu["user_s"] > 0
+    assert report.parallel == default_parallel()  # run_program's default, reported as run
+    assert set(report.cpu) == {"user_s", "system_s", "threads_user_s", "threads_system_s"}
+    assert report.cpu["user_s"] > 0 and report.cpu["threads_user_s"] > 0
     ratios = user_path_ratios(report.user_path, report.cpu)
-    assert set(ratios) == {*GOALS, "host_thread_speedup", "host_stream_speedup"}
+    assert set(ratios) == {*GOALS, "threads_speedup", "host_thread_speedup",
+                           "host_stream_speedup"}
     up = report.user_path
     assert ratios["workers_speedup"] == up["frames_axis_1_worker"] / up["frames_axis_n_workers"]
     doc = json.loads(json.dumps(report.to_dict()))

@@ -192,3 +192,46 @@ def test_lazy_arrays_reach_a_worker_process_as_a_plain_dict():
     back = pickle.loads(pickle.dumps(lazy))
     assert type(back) is dict and sorted(back) == ["a", "b"]
     assert back["a"].tolist() == [0, 1, 2] and back["b"].dtype == np.int16
+
+
+def test_a_freed_stack_lends_its_mapping_to_the_next_while_freed_memory_is_held(monkeypatch):
+    import gc
+
+    from backends.reference import frames_memory
+
+    freed = frames_memory._Freed(3 * 8000)
+    monkeypatch.setattr(frames_memory, "_FREED", freed)
+    monkeypatch.setattr(frames_memory, "held", lambda: (1, 1))
+    a = private_empty((1000,), np.float64)
+    address = a.ctypes.data
+    b = private_empty((1000,), np.float64)  # a is alive: a mapping of its own
+    assert b.ctypes.data != address
+    view = a[10:]
+    del a
+    gc.collect()
+    assert private_empty((1000,), np.float64).ctypes.data != address  # a view keeps it
+    del view
+    gc.collect()
+    c = private_empty((1000,), np.float64)
+    assert c.ctypes.data == address  # a's mapping, kept for the next stack of its size
+    assert private_empty((999,), np.float64).ctypes.data != b.ctypes.data
+    monkeypatch.setattr(frames_memory, "held", lambda: None)
+    d = private_empty((1000,), np.float64)  # made while nothing is held: never kept
+    kept = freed._bytes
+    del d
+    gc.collect()
+    assert freed._bytes == kept
+
+
+def test_kept_stacks_never_exceed_their_limit(monkeypatch):
+    import gc
+
+    from backends.reference import frames_memory
+
+    freed = frames_memory._Freed(2 * 8000)
+    monkeypatch.setattr(frames_memory, "_FREED", freed)
+    monkeypatch.setattr(frames_memory, "held", lambda: (1, 1))
+    stacks = [private_empty((1000,), np.float64) for _ in range(5)]
+    del stacks
+    gc.collect()
+    assert freed._bytes == 2 * 8000 and sum(len(v) for v in freed._kept.values()) == 2

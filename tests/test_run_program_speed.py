@@ -184,7 +184,7 @@ def test_map_frames_raises_the_earliest_failure_and_resolves_workers():
     assert resolve_workers(None, 1) == 1
 
 
-def test_radarsnn_run_workers_flag(tmp_path, capsys):
+def test_radarsnn_run_workers_and_parallel_flags(tmp_path, capsys):
     from backends import save
     from radarsnn.cli import main
 
@@ -192,12 +192,12 @@ def test_radarsnn_run_workers_flag(tmp_path, capsys):
     x = _frames(5, 3)
     np.save(tmp_path / "x.npy", x)
     outs = []
-    for n in ("1", "2"):
-        out = tmp_path / f"y{n}.npz"
+    for n, kind in (("1", "auto"), ("2", "threads"), ("2", "processes"), ("2", "auto")):
+        out = tmp_path / f"y{n}{kind}.npz"
         assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "x.npy"), "--clip",
-                     "--workers", n, "-o", str(out), "-q"]) == 0
+                     "--workers", n, "--parallel", kind, "-o", str(out), "-q"]) == 0
         outs.append(np.load(out)["o"])
-    assert _bits(outs[0]) == _bits(outs[1]) and outs[0].shape[0] == 3
+    assert all(_bits(o) == _bits(outs[0]) for o in outs) and outs[0].shape[0] == 3
     assert main(["run", str(tmp_path / "art"), "-i", str(tmp_path / "x.npy"),
                  "--workers", "0"]) == 2
     assert "argument --workers: 0 is not a whole number >= 1" in capsys.readouterr().err

@@ -16,6 +16,7 @@ Modules: :mod:`~backends.reference.neuron` (the pure step function),
 from backends.reference.checker import ReferenceSimulator
 from backends.reference.closed import closed_form_problems
 from backends.reference.delivery import DELIVERY_BUILDERS, MatrixDelivery, StencilDelivery
+from backends.reference.frames_pool import close_frame_workers
 from backends.reference.neuron import NeuronState, StepParams, decay, neuron_step
 from backends.reference.plan import SimPlan, build_plan
 from backends.reference.program import ProgramResult, program_plans, run_program
@@ -36,6 +37,7 @@ __all__ = [
     "StencilDelivery",
     "StepParams",
     "build_plan",
+    "close_frame_workers",
     "closed_form_problems",
     "decay",
     "neuron_step",

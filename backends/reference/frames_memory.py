@@ -91,10 +91,10 @@ def private_empty(shape: tuple[int, ...], dtype) -> np.ndarray:
         buffer = mmap.mmap(-1, size, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
         if hasattr(mmap, "MADV_HUGEPAGE") and size >= 4 << 20:
             buffer.madvise(mmap.MADV_HUGEPAGE)  # as numpy asks for its own large arrays
-    array = np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
-    if _FREED.keeps():
-        weakref.finalize(array, _FREED.give, size, buffer).atexit = False
-    return array
+    flat = np.frombuffer(buffer, dtype=dtype, count=count)
+    if _FREED.keeps():  # on the array every view's .base is: freed only when no view is left
+        weakref.finalize(flat, _FREED.give, size, buffer).atexit = False
+    return flat.reshape(shape)
 
 
 class _Freed:

@@ -9,14 +9,10 @@ parent has run a frame itself — which builds the program's plans
 (:mod:`backends.reference.plan_cache`), inherited by the children — and are kept for the
 following calls on the same program.
 
-Each worker has two *slots* of shared memory (:mod:`backends.reference.frames_memory`),
-so it runs one frame while the parent copies the previous one out.  The parent writes a
-frame's inputs into a free slot and sends only a header through the pipe; the worker runs
-the frame (:func:`~backends.reference.run_program`, one frame), packs its result's arrays
-into the same slot after the inputs and sends back a header and the result's light record
-(counts and the like).  The parent copies the arrays into the stacked result and gives the
-slot the next frame.  A result that outgrows the slots makes a new pool, forked with
-larger ones.  Nothing large is pickled.
+Frames and results travel through slots of shared memory, two per worker
+(:class:`~backends.reference.frames_workers.FramePool`): nothing large is pickled.  The
+slots are sized on the first frame; a result that outgrows them makes a new pool, forked
+with larger ones.
 
 The pool is kept for one program at a time (running another program on processes, or
 changing a part of this one — a segment, a network's populations, projections, encoders,
@@ -41,31 +37,18 @@ False
 
 from __future__ import annotations
 
-import multiprocessing
 import os
-import signal
 import threading
-import weakref
-from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from multiprocessing.connection import wait
 
 import numpy as np
 
-from backends.reference.frames_memory import (
-    pack_arrays,
-    packed_bytes,
-    restore_result,
-    shared_empty,
-    strip_result,
-    unpack_arrays,
-)
+from backends.reference.frames_memory import packed_bytes, strip_result
+from backends.reference.frames_workers import FramePool
 
-__all__ = ["FramePool", "close_frame_workers", "has_workers", "map_frames_pooled",
-           "pool_key", "workers_cpu_s"]
+__all__ = ["close_frame_workers", "has_workers", "map_frames_pooled", "pool_key",
+           "workers_cpu_s"]
 
-#: Slots per worker: one frame runs while the parent copies the previous one out.
-SLOTS = 2
 #: Head room of a slot over the first frame's inputs and result (bytes: × 1.25 + this).
 _SLOT_MARGIN = 1 << 20
 
@@ -91,163 +74,6 @@ def _same(a: object, b: object) -> bool:
     if isinstance(a, int | str) and type(a) is type(b):
         return a == b
     return a is b
-
-
-class FramePool:
-    """Worker processes forked for one program, each with :data:`SLOTS` shared slots.
-
-    Parameters
-    ----------
-    program : object
-        The program the workers run (held weakly: the pool ends when it is freed).
-    key : tuple
-        :func:`pool_key` of the program when the workers are forked.
-    run_one : callable
-        ``run_one(inputs, options) -> ProgramResult`` of one frame (run in the workers).
-    workers : int
-        Worker processes.
-    slot_bytes : int
-        Bytes of each slot.
-    """
-
-    def __init__(self, program, key: tuple, run_one: Callable, workers: int,
-                 slot_bytes: int) -> None:
-        self.key, self.workers, self.slot_bytes = key, workers, slot_bytes
-        self.owner = os.getpid()
-        self.broken = False
-        self._program = weakref.ref(program)
-        self.slots = [[shared_empty((slot_bytes,), np.uint8) for _ in range(SLOTS)]
-                      for _ in range(workers)]
-        context = multiprocessing.get_context("fork")
-        self.conns, self.children = [], []
-        for w in range(workers):
-            here, there = context.Pipe(duplex=True)
-            child = context.Process(target=_serve, name=f"radarsnn-frames-{w}", daemon=True,
-                                    args=(there, [*self.conns, here], run_one, self.slots[w]))
-            child.start()
-            there.close()
-            self.conns.append(here)
-            self.children.append(child)
-        self._finalizer = weakref.finalize(program, _close, self.conns, self.children,
-                                           self.owner)
-
-    def matches(self, program, key: tuple, workers: int) -> bool:
-        """Whether this pool can run ``program`` (with ``key``) on ``workers`` workers."""
-        return (not self.broken and self.owner == os.getpid() and self._finalizer.alive
-                and self._program() is program and workers == self.workers
-                and _same(key, self.key) and all(c.is_alive() for c in self.children))
-
-    def close(self) -> None:
-        """End the workers (each finishes the frame it runs)."""
-        self.broken = True
-        self._finalizer()
-
-    def map(self, frames: Sequence[int], inputs_of: Callable[[int], Mapping[str, np.ndarray]],
-            options, store: Callable[[int, object], None], done: Callable[[], None]
-            ) -> tuple[list[int], list[int], int]:
-        """Run ``frames`` on the workers; ``store(i, result)`` and ``done()`` for each done.
-
-        Returns the frames not done (a worker raised or died), the frames not started
-        and the slot bytes a frame needed when it did not fit (0 if every frame fitted: the
-        frames not started then follow a failure, else they need a larger pool).
-        """
-        todo = deque(frames)
-        busy: dict[tuple[int, int], int] = {}
-        lost: list[int] = []
-        need = 0
-        stop = False
-
-        def give(w: int, s: int) -> None:
-            nonlocal need, stop
-            inputs = inputs_of(todo[0])
-            header, end = pack_arrays([np.asarray(v) for v in inputs.values()],
-                                      self.slots[w][s])
-            if header is None:  # inputs larger than a slot
-                need, stop = max(need, 2 * end), True
-                return
-            i = todo.popleft()
-            self.conns[w].send((i, s, list(inputs), header, end, options))
-            busy[(w, s)] = i
-
-        for s in range(SLOTS):
-            for w in range(self.workers):
-                if todo and not stop:
-                    give(w, s)
-        while busy:
-            open_ = {self.conns[w]: w for w, _ in busy}
-            for conn in wait(list(open_)):
-                w = open_[conn]
-                try:
-                    i, s, status, light, payload = conn.recv()
-                except (EOFError, OSError):  # the worker died: its frames run here
-                    self.broken = stop = True
-                    lost += [busy.pop(k) for k in [k for k in busy if k[0] == w]]
-                    continue
-                del busy[(w, s)]
-                if status == "slot":
-                    store(i, restore_result(light, unpack_arrays(payload, self.slots[w][s])))
-                    done()
-                elif status == "pipe":
-                    store(i, restore_result(light, payload))
-                    done()
-                elif status == "big":
-                    need, stop = max(need, payload), True
-                    todo.appendleft(i)
-                else:  # it failed: the parent raises its error; no more frames start
-                    lost.append(i)
-                    stop = True
-                if todo and not stop:
-                    give(w, s)
-        if self.broken:
-            lost += todo
-            todo.clear()
-        return sorted(lost), sorted(todo), need
-
-
-def _close(conns, children, owner: int) -> None:
-    """End a pool's workers (only from the process that forked them)."""
-    if os.getpid() != owner:
-        return
-    for conn in conns:
-        try:
-            conn.send(None)
-        except OSError:
-            pass
-        conn.close()
-    for child in children:
-        child.join(timeout=2.0)
-        if child.is_alive():
-            child.terminate()
-            child.join()
-
-
-def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> None:
-    """A worker: run the frames it is sent until told to stop (None) or the parent ends."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for other in inherited:  # the parent's ends: the parent's exit must reach this worker
-        other.close()
-    while True:
-        try:
-            message = conn.recv()
-        except (EOFError, OSError):
-            return
-        if message is None:
-            return
-        i, s, names, header, start, options = message
-        slot = slots[s]
-        try:
-            inputs = dict(zip(names, unpack_arrays(header, slot), strict=True))
-            light, arrays = strip_result(run_one(inputs, options))
-            packed, end = pack_arrays(arrays, slot, start)
-            if packed is not None:
-                reply = (i, s, "slot", light, packed)
-            elif any(a.dtype.hasobject for a in arrays):  # Python objects: through the pipe
-                reply = (i, s, "pipe", light, arrays)
-            else:
-                reply = (i, s, "big", None, end)
-        except Exception:  # noqa: BLE001 - the parent runs the frame again and raises
-            reply = (i, s, "failed", None, None)
-        conn.send(reply)
 
 
 def slot_bytes_for(inputs: Mapping[str, np.ndarray], result) -> int:
@@ -295,7 +121,7 @@ def _run_pooled(program, key, run_one, count, workers, inputs_of, options, store
 
     pool = _CURRENT[0]
     todo = list(range(count))
-    if pool is not None and not pool.matches(program, key, workers):
+    if pool is not None and not (pool.matches(program, workers) and _same(key, pool.key)):
         pool.close()
         pool = _CURRENT[0] = None
     if pool is None:  # frame 0 here: it builds the plans the workers inherit
@@ -368,8 +194,7 @@ def workers_cpu_s() -> tuple[float, float]:
 def has_workers(program) -> bool:
     """Whether worker processes are kept for ``program`` (forked by an earlier run)."""
     pool = _CURRENT[0]
-    return pool is not None and not pool.broken and pool.owner == os.getpid() \
-        and pool._program() is program
+    return pool is not None and pool.runs(program)
 
 
 def close_frame_workers() -> bool:

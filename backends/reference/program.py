@@ -214,7 +214,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
                 max_memory_bytes: int | None = MAX_MEMORY_BYTES,
                 max_time_s: float | None = MAX_TIME_S,
                 progress: Callable[[int, int], None] | None = None,
-                workers: int | None = None,
+                workers: int | None = None, parallel: str = "auto",
                 options: RunOptions | None = None,
                 engine: SegmentEngine = REFERENCE) -> ProgramResult:
     """Run every segment of ``program`` on ``inputs`` (one array per graph input node).
@@ -251,12 +251,16 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     progress : callable, optional
         ``progress(done, total)`` after each frame of a framed run (e.g. a tqdm update).
     workers : int, optional
-        Threads that share out the frames of a frames axis (None: one per available core;
+        Workers that share out the frames of a frames axis (None: one per available core;
         :mod:`backends.reference.frames_run`); the result is the same for any number.
+    parallel : {"auto", "threads", "processes"}
+        What those workers are (:attr:`RunOptions.parallel`): ``auto`` takes worker
+        processes, forked once and kept for this program's next calls
+        (:mod:`backends.reference.frames_pool`), where forking is safe, else threads.
     options : RunOptions, optional
         ``mode``, ``arithmetic``, ``record_spikes``, ``out_of_range``,
-        ``max_memory_bytes``, ``max_time_s`` and ``workers`` as one record (it replaces those
-        arguments); every spiking segment runs with it
+        ``max_memory_bytes``, ``max_time_s``, ``workers`` and ``parallel`` as one record (it
+        replaces those arguments); every spiking segment runs with it
         (:mod:`backends.reference.run_options`).
     engine : SegmentEngine
         What runs each spiking segment (:mod:`backends.reference.engine`): the reference
@@ -298,7 +302,7 @@ def run_program(program: CompiledProgram, inputs: Mapping[str, np.ndarray], *,
     if options is None:
         options = RunOptions(mode=mode, arithmetic=arithmetic, record_spikes=record_spikes,
                              out_of_range=out_of_range, max_memory_bytes=max_memory_bytes,
-                             max_time_s=max_time_s, workers=workers)
+                             max_time_s=max_time_s, workers=workers, parallel=parallel)
     mode, arithmetic, out_of_range = options.mode, options.arithmetic, options.out_of_range
     max_memory_bytes, max_time_s = options.max_memory_bytes, options.max_time_s
     check_policy(out_of_range, where)

@@ -2,10 +2,12 @@
 
 Inputs are read by :mod:`radarsnn.cli.arrays` (``.npy``, ``.npz``, ``.mat``, TI
 ``.bin``); one with a leading frames axis runs frame after frame with a progress
-bar (:mod:`ir.frames`), the frames shared out to ``--workers`` threads (default: one
-per available core).  Values above an encoder's calibrated range are refused by
-default (one ``error:`` line naming the count and ``--clip``); ``--clip`` clips them
-silently, ``--out-of-range warn`` clips them with one warning line (docs/cli.md).
+bar (:mod:`ir.frames`), the frames shared out to ``--workers`` workers (default: one
+per available core) of the ``--parallel`` kind (default ``auto``: worker processes where the
+system can fork, :mod:`backends.reference.frames_pool`).  Values above an encoder's
+calibrated range are refused by default (one ``error:`` line naming the count and
+``--clip``); ``--clip`` clips them silently, ``--out-of-range warn`` clips them with one
+warning line (docs/cli.md).
 """
 
 from __future__ import annotations
@@ -105,14 +107,15 @@ def _simulate_frames(loaded, inputs: dict, args: argparse.Namespace, out_of_rang
     count = n_frames(types, inputs, f"program {loaded.graph.name!r}")
     if count is None or args.quiet or args.json:
         return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
-                           workers=args.workers)
+                           workers=args.workers, parallel=args.parallel)
     from compiler.progress import bar_without_thread
 
     with bar_without_thread(total=count, desc="run", unit="frame", file=sys.stderr,
                             leave=False, disable=None,  # None: no bar off a terminal
                             dynamic_ncols=True) as bar:
         return run_program(loaded, inputs, mode=args.mode, out_of_range=out_of_range,
-                           progress=lambda done, total: bar.update(1), workers=args.workers)
+                           progress=lambda done, total: bar.update(1), workers=args.workers,
+                           parallel=args.parallel)
 
 
 def _workers(text: str) -> int:
@@ -178,8 +181,12 @@ def add_parsers(sub) -> None:
                         "the summary and --json")
     p.add_argument("--clip", action="store_true", help="the same as --out-of-range clip")
     p.add_argument("--workers", type=_workers, default=None, metavar="N",
-                   help="threads that share out the frames of an input with a frames axis "
+                   help="workers that share out the frames of an input with a frames axis "
                         "(the result is the same for any N; default: one per available core)")
+    p.add_argument("--parallel", choices=["auto", "threads", "processes"], default="auto",
+                   help="what the workers are: threads, or worker processes forked once "
+                        "(auto, the default: processes where the system can fork, else "
+                        "threads; the result is the same)")
     p.add_argument("--output", "-o", help="write decoded outputs to this .npz")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing")

@@ -1,0 +1,221 @@
+"""Worker processes forked for one program, each with two slots of shared memory.
+
+:class:`FramePool` is the mechanism of :mod:`backends.reference.frames_pool` (which keeps one
+for the program last run on processes and says when to fork a new one).  Each worker has
+:data:`SLOTS` slots (:mod:`backends.reference.frames_memory`), so it runs one frame while
+the parent copies the previous one out: the parent writes a frame's inputs into a free slot
+and sends their header; the worker runs the frame, packs its result's arrays into the same
+slot after the inputs, and sends back their header and the result's light record.  A result
+that does not fit is reported with the bytes it needs; one that holds Python objects comes
+through the pipe; a frame that raises is reported failed (the parent runs it again and
+raises its error).  A worker ignores ``SIGINT``: the parent handles Ctrl-C and ends the
+pool.  The workers end when the pool is closed or its program is freed.
+
+Examples
+--------
+>>> import numpy as np
+>>> from backends.reference.program import ProgramResult
+>>> class Toy:
+...     pass
+>>> def run_one(inputs, options):
+...     return ProgramResult(values={"y": 2 * inputs["x"]}, outputs={})
+>>> toy, got = Toy(), {}
+>>> pool = FramePool(toy, (), run_one, workers=2, slot_bytes=1 << 16)
+>>> pool.map([0, 1, 2], lambda i: {"x": np.full(3, i)}, None,
+...          lambda i, r: got.__setitem__(i, r.values["y"].tolist()), lambda: None)
+([], [], 0)
+>>> pool.close()
+>>> got
+{0: [0, 0, 0], 1: [2, 2, 2], 2: [4, 4, 4]}
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import weakref
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
+from multiprocessing.connection import wait
+
+import numpy as np
+
+from backends.reference.frames_memory import (
+    pack_arrays,
+    restore_result,
+    shared_empty,
+    strip_result,
+    unpack_arrays,
+)
+
+__all__ = ["SLOTS", "FramePool"]
+
+#: Slots per worker: one frame runs while the parent copies the previous one out.
+SLOTS = 2
+
+
+class FramePool:
+    """Worker processes forked for one program, each with :data:`SLOTS` shared slots.
+
+    Parameters
+    ----------
+    program : object
+        The program the workers run (held weakly: the pool ends when it is freed).
+    key : tuple
+        What the workers were forked with (kept as :attr:`key`:
+        :func:`~backends.reference.frames_pool.pool_key`).
+    run_one : callable
+        ``run_one(inputs, options) -> ProgramResult`` of one frame (run in the workers).
+    workers : int
+        Worker processes.
+    slot_bytes : int
+        Bytes of each slot.
+    """
+
+    def __init__(self, program, key: tuple, run_one: Callable, workers: int,
+                 slot_bytes: int) -> None:
+        self.key, self.workers, self.slot_bytes = key, workers, slot_bytes
+        self.owner = os.getpid()
+        self.broken = False
+        self._program = weakref.ref(program)
+        self.slots = [[shared_empty((slot_bytes,), np.uint8) for _ in range(SLOTS)]
+                      for _ in range(workers)]
+        context = multiprocessing.get_context("fork")
+        self.conns, self.children = [], []
+        for w in range(workers):
+            here, there = context.Pipe(duplex=True)
+            child = context.Process(target=_serve, name=f"radarsnn-frames-{w}", daemon=True,
+                                    args=(there, [*self.conns, here], run_one, self.slots[w]))
+            child.start()
+            there.close()
+            self.conns.append(here)
+            self.children.append(child)
+        self._finalizer = weakref.finalize(program, _close, self.conns, self.children,
+                                           self.owner)
+
+    def matches(self, program, workers: int) -> bool:
+        """Whether this pool, alive in this process, runs ``program`` on ``workers`` workers
+        (its :attr:`key` is the caller's to compare)."""
+        return (self.usable() and self._program() is program and workers == self.workers
+                and all(c.is_alive() for c in self.children))
+
+    def usable(self) -> bool:
+        """Whether this pool is this process's own and was not ended."""
+        return not self.broken and self.owner == os.getpid() and self._finalizer.alive
+
+    def runs(self, program) -> bool:
+        """Whether this pool is usable and was forked for ``program``."""
+        return self.usable() and self._program() is program
+
+    def close(self) -> None:
+        """End the workers (each finishes the frame it runs)."""
+        self.broken = True
+        self._finalizer()
+
+    def map(self, frames: Sequence[int], inputs_of: Callable[[int], Mapping[str, np.ndarray]],
+            options, store: Callable[[int, object], None], done: Callable[[], None]
+            ) -> tuple[list[int], list[int], int]:
+        """Run ``frames`` on the workers; ``store(i, result)`` and ``done()`` for each done.
+
+        Returns the frames not done (a worker raised or died), the frames not started
+        and the slot bytes a frame needed when it did not fit (0 if every frame fitted: the
+        frames not started then follow a failure, else they need a larger pool).
+        """
+        todo = deque(frames)
+        busy: dict[tuple[int, int], int] = {}
+        lost: list[int] = []
+        need = 0
+        stop = False
+
+        def give(w: int, s: int) -> None:
+            nonlocal need, stop
+            inputs = inputs_of(todo[0])
+            header, end = pack_arrays([np.asarray(v) for v in inputs.values()],
+                                      self.slots[w][s])
+            if header is None:  # inputs larger than a slot
+                need, stop = max(need, 2 * end), True
+                return
+            i = todo.popleft()
+            self.conns[w].send((i, s, list(inputs), header, end, options))
+            busy[(w, s)] = i
+
+        for s in range(SLOTS):
+            for w in range(self.workers):
+                if todo and not stop:
+                    give(w, s)
+        while busy:
+            open_ = {self.conns[w]: w for w, _ in busy}
+            for conn in wait(list(open_)):
+                w = open_[conn]
+                try:
+                    i, s, status, light, payload = conn.recv()
+                except (EOFError, OSError):  # the worker died: its frames run here
+                    self.broken = stop = True
+                    lost += [busy.pop(k) for k in [k for k in busy if k[0] == w]]
+                    continue
+                del busy[(w, s)]
+                if status == "slot":
+                    store(i, restore_result(light, unpack_arrays(payload, self.slots[w][s])))
+                    done()
+                elif status == "pipe":
+                    store(i, restore_result(light, payload))
+                    done()
+                elif status == "big":
+                    need, stop = max(need, payload), True
+                    todo.appendleft(i)
+                else:  # it failed: the parent raises its error; no more frames start
+                    lost.append(i)
+                    stop = True
+                if todo and not stop:
+                    give(w, s)
+        if self.broken:
+            lost += todo
+            todo.clear()
+        return sorted(lost), sorted(todo), need
+
+
+def _close(conns, children, owner: int) -> None:
+    """End a pool's workers (only from the process that forked them)."""
+    if os.getpid() != owner:
+        return
+    for conn in conns:
+        try:
+            conn.send(None)
+        except OSError:
+            pass
+        conn.close()
+    for child in children:
+        child.join(timeout=2.0)
+        if child.is_alive():
+            child.terminate()
+            child.join()
+
+
+def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> None:
+    """A worker: run the frames it is sent until told to stop (None) or the parent ends."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for other in inherited:  # the parent's ends: the parent's exit must reach this worker
+        other.close()
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        i, s, names, header, start, options = message
+        slot = slots[s]
+        try:
+            inputs = dict(zip(names, unpack_arrays(header, slot), strict=True))
+            light, arrays = strip_result(run_one(inputs, options))
+            packed, end = pack_arrays(arrays, slot, start)
+            if packed is not None:
+                reply = (i, s, "slot", light, packed)
+            elif any(a.dtype.hasobject for a in arrays):  # Python objects: through the pipe
+                reply = (i, s, "pipe", light, arrays)
+            else:
+                reply = (i, s, "big", None, end)
+        except Exception:  # noqa: BLE001 - the parent runs the frame again and raises
+            reply = (i, s, "failed", None, None)
+        conn.send(reply)
