@@ -94,9 +94,11 @@ def test_the_page_quotes_bench_tables() -> None:
             "ratios.brian2_over_step_range_stage", "peak_rss_gb"} <= set(keys), keys
     user = {"user_path.run_program_first_call", "user_path.run_program_frame",
             "user_path.run_program_frame_planned", "user_path.frames_axis_1_worker",
-            "user_path.frames_axis_n_workers", "user_path.compile_accuracy_off",
-            "user_path.compile_accuracy_on", "cpu.user_s", "cpu.system_s",
-            "user_path_ratios.host_thread_speedup", "user_path_ratios.host_stream_speedup"}
+            "user_path.frames_axis_n_workers", "user_path.frames_axis_n_threads",
+            "user_path.compile_accuracy_off", "user_path.compile_accuracy_on", "cpu.user_s",
+            "cpu.system_s", "cpu.threads_user_s", "cpu.threads_system_s",
+            "user_path_ratios.threads_speedup", "user_path_ratios.host_thread_speedup",
+            "user_path_ratios.host_stream_speedup"}
     assert user | {f"user_path_ratios.{k}" for k in GOALS} <= set(keys), keys
 
 

@@ -25,8 +25,8 @@ Examples
 ...          lambda i, r: got.__setitem__(i, r.values["y"].tolist()), lambda: None)
 ([], [], 0)
 >>> pool.close()
->>> got
-{0: [0, 0, 0], 1: [2, 2, 2], 2: [4, 4, 4]}
+>>> sorted(got.items())
+[(0, [0, 0, 0]), (1, [2, 2, 2]), (2, [4, 4, 4])]
 """
 
 from __future__ import annotations
