@@ -16,11 +16,12 @@ bench's program and frame, each pair of a ratio *in turn* (the bench's
   (``parallel``: :func:`backends.reference.frames_run.default_parallel`), and
   ``frames_axis_n_threads``: the same workers as threads (``parallel="threads"``), all
   three in turn;
-* the user and system CPU seconds of the first two (``cpu.user_s``, ``cpu.system_s``) and
-  of the threads (``cpu.threads_user_s``, ``cpu.threads_system_s``), worker processes
-  included (``resource.getrusage`` and
-  :func:`~backends.reference.frames_pool.workers_cpu_s`: system time is mostly page
-  faults);
+* the user and system CPU seconds of the timed calls of the first two (``cpu.user_s``,
+  ``cpu.system_s``) and of the threads (``cpu.threads_user_s``, ``cpu.threads_system_s``),
+  and of the three warm-up calls, which fork the worker processes and page their memory in
+  (``cpu.warmup_user_s``, ``cpu.warmup_system_s``), worker processes included
+  (``resource.getrusage`` and :func:`~backends.reference.frames_pool.workers_cpu_s`:
+  system time is mostly page faults);
 * what the host allows threads right now: ``host_blas_1_thread`` / ``host_blas_n_threads``,
   ``workers`` series of plain BLAS products (one thread each) run one after the other and
   side by side, in turn; their ratio ``host_thread_speedup`` is what a second core gives
@@ -101,12 +102,16 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     spent: dict[str, np.ndarray] = {}
 
     def counted(kind: str, run: Callable[[], object]) -> Callable[[], object]:
+        calls = [0]
+
         def call() -> object:  # each series' own CPU seconds, however the calls interleave
+            series = "warmup" if calls[0] == 0 else kind  # the first call forks the workers
+            calls[0] += 1
             before = np.array(_cpu())
             try:
                 return run()
             finally:
-                spent[kind] = spent.get(kind, 0.0) + np.array(_cpu()) - before
+                spent[series] = spent.get(series, 0.0) + np.array(_cpu()) - before
         return call
 
     per_call = medians({
@@ -118,10 +123,9 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
             program, stacked, out_of_range="clip", workers=workers, parallel="threads"))},
         repeats)
     report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
-    user, system = spent.get("default", np.zeros(2))
-    report.cpu.update({"user_s": float(user), "system_s": float(system)})
-    user, system = spent.get("threads", np.zeros(2))
-    report.cpu.update({"threads_user_s": float(user), "threads_system_s": float(system)})
+    for series, prefix in (("default", ""), ("threads", "threads_"), ("warmup", "warmup_")):
+        user, system = spent.get(series, np.zeros(2))
+        report.cpu.update({f"{prefix}user_s": float(user), f"{prefix}system_s": float(system)})
     report.user_path.update(_host_threads(workers, repeats, medians))
 
 
@@ -215,9 +219,11 @@ def user_path_lines(report) -> list[str]:
     if report.cpu:
         lines.append(f"  frames-axis CPU: user {report.cpu['user_s']:.2f} s, system "
                      f"{report.cpu['system_s']:.2f} s")
-        if "threads_user_s" in report.cpu:
-            lines.append(f"  frames-axis CPU on threads: user {report.cpu['threads_user_s']:.2f}"
-                         f" s, system {report.cpu['threads_system_s']:.2f} s")
+        for prefix, what in (("threads_", "on threads"), ("warmup_", "of the warm-up calls")):
+            if f"{prefix}user_s" in report.cpu:
+                lines.append(f"  frames-axis CPU {what}: user "
+                             f"{report.cpu[prefix + 'user_s']:.2f} s, system "
+                             f"{report.cpu[prefix + 'system_s']:.2f} s")
     for k, v in user_path_ratios(report.user_path, report.cpu).items():
         lines.append(f"  {k:<32} {v:>8.2f}  {GOALS.get(k, '')}")
     return lines

@@ -47,7 +47,8 @@ def test_the_user_path_is_timed_and_its_ratios_are_the_figures():
         "compile_accuracy_off", "compile_accuracy_on"}, report.notes
     assert report.workers >= 1 and report.n_frames_axis == 4
     assert report.parallel == default_parallel()  # run_program's default, reported as run
-    assert set(report.cpu) == {"user_s", "system_s", "threads_user_s", "threads_system_s"}
+    assert set(report.cpu) == {"user_s", "system_s", "threads_user_s", "threads_system_s",
+                               "warmup_user_s", "warmup_system_s"}
     assert report.cpu["user_s"] > 0 and report.cpu["threads_user_s"] > 0
     ratios = user_path_ratios(report.user_path, report.cpu)
     assert set(ratios) == {*GOALS, "threads_speedup", "host_thread_speedup",

@@ -207,3 +207,106 @@ def test_auto_takes_processes_only_where_forking_is_safe(program):
     finally:
         stop.set()
         other.join()
+
+
+def _frames_in_a_daemon(conn) -> None:
+    program = compile_graph(_rd_chain(), target=None, calibration_inputs={"adc": _frames(0, 3)})
+    got = run_program(program, {"adc": _frames(1, 4)}, options=ON_PROCESSES)
+    conn.send((resolve_parallel("processes", 2, program), got.outputs["o"].tolist()))
+
+
+def test_a_daemonic_process_runs_its_frames_on_threads():
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    here, there = context.Pipe()
+    child = context.Process(target=_frames_in_a_daemon, args=(there,), daemon=True)
+    child.start()
+    kind, outputs = here.recv()
+    child.join()
+    one = run_program(compile_graph(_rd_chain(), target=None,
+                                    calibration_inputs={"adc": _frames(0, 3)}),
+                      {"adc": _frames(1, 4)}, out_of_range="clip", workers=1)
+    assert kind == "threads" and outputs == one.outputs["o"].tolist()
+
+
+# -- rows written straight into shared stacks (frames_rows)
+
+
+def _free_block_addresses(pool) -> set[int]:
+    return {np.frombuffer(b.buffer, np.uint8).ctypes.data
+            for blocks in pool.row_stacks._free.values() for b in blocks}
+
+
+def test_results_kept_by_the_caller_are_never_written_again(program, monkeypatch):
+    from backends.reference import frames_rows
+
+    monkeypatch.setattr(frames_rows, "held", lambda: (1, 1))  # freed stacks are reused
+    x1, x2 = _frames(1, 6), _frames(2, 6)
+    run_program(program, {"adc": x1}, options=ON_PROCESSES)  # forks; the layout is known
+    first = run_program(program, {"adc": x1}, options=ON_PROCESSES)
+    kept = {k: np.array(v, copy=True) for k, v in first.values.items()}
+    view = first.values["dop"][2:]
+    kept_view = view.copy()
+    for _ in range(3):  # stacks freed by nobody: these calls get new blocks
+        _check(program, x2)
+    assert all(_bits_equal(first.values[k], kept[k]) for k in kept)
+    del first
+    for _ in range(3):  # the view still holds its stack: never reused
+        _check(program, x2)
+    assert _bits_equal(view, kept_view)
+
+
+def _bits_equal(a, b) -> bool:
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_freed_stacks_are_reused_call_after_call(program, monkeypatch):
+    from backends.reference import frames_rows
+
+    monkeypatch.setattr(frames_rows, "held", lambda: (1, 1))
+    x = _frames(3, 5)
+    run_program(program, {"adc": x}, options=ON_PROCESSES)
+    result = run_program(program, {"adc": x}, options=ON_PROCESSES)
+    address = result.values["mag"].ctypes.data
+    assert address not in _free_block_addresses(_CURRENT[0])
+    del result  # its stacks are the workers' shared blocks, kept for the next call
+    assert address in _free_block_addresses(_CURRENT[0])
+    stacks = _CURRENT[0].row_stacks
+    made = len(stacks._free) and sum(len(v) for v in stacks._free.values())
+    for _ in range(4):
+        _check(program, x)
+    assert stacks.new == [] and sum(len(v) for v in stacks._free.values()) == made
+
+
+def test_a_result_of_another_layout_comes_through_the_slots(program):
+    x = _frames(4, 5)
+    _check(program, x)
+    rasters = replace_options(record_spikes=True)
+    got = run_program(program, {"adc": x}, options=rasters)
+    one = run_program(program, {"adc": x}, out_of_range="clip", workers=1, record_spikes=True)
+    _same_run(got, one)
+    for a, b in zip(got.simulations, one.simulations, strict=True):
+        assert a.spikes.keys() == b.spikes.keys()
+        assert all(_bits_equal(a.spikes[k], b.spikes[k]) for k in a.spikes)
+    _check(program, x)  # and back
+
+
+def replace_options(**changes) -> RunOptions:
+    from dataclasses import replace
+
+    return replace(ON_PROCESSES, **changes)
+
+
+def test_without_held_memory_freed_stacks_are_let_go_here_and_in_the_workers(program,
+                                                                             monkeypatch):
+    from backends.reference import frames_rows
+
+    monkeypatch.setattr(frames_rows, "held", lambda: None)
+    x = _frames(5, 4)
+    for _ in range(4):
+        _check(program, x)
+        stacks = _CURRENT[0].row_stacks
+        assert stacks._free == {}  # nothing kept; the ids dropped go out with the next call
+    assert stacks.dropped  # the last call's, told to the workers by the next one
+    _check(program, x)

@@ -54,8 +54,11 @@ KEPT_STACK_BYTES = 256 << 20
 
 
 def fork_available() -> bool:
-    """Whether worker processes can be forked here (they inherit the plans and buffers)."""
-    return hasattr(os, "fork") and "fork" in multiprocessing.get_all_start_methods()
+    """Whether worker processes can be forked here (they inherit the plans and buffers): the
+    system can fork, and this process is not a daemonic one (a ``multiprocessing`` pool's
+    worker, say), which may not have children."""
+    return (hasattr(os, "fork") and "fork" in multiprocessing.get_all_start_methods()
+            and not multiprocessing.current_process().daemon)
 
 
 def shared_empty(shape: tuple[int, ...], dtype) -> np.ndarray:

@@ -9,10 +9,12 @@ parent has run a frame itself — which builds the program's plans
 (:mod:`backends.reference.plan_cache`), inherited by the children — and are kept for the
 following calls on the same program.
 
-Frames and results travel through slots of shared memory, two per worker
-(:class:`~backends.reference.frames_workers.FramePool`): nothing large is pickled.  The
-slots are sized on the first frame; a result that outgrows them makes a new pool, forked
-with larger ones.
+A frame's inputs travel through slots of shared memory, two per worker
+(:class:`~backends.reference.frames_workers.FramePool`), and its result goes straight into
+the rows of stacks in shared memory (:mod:`backends.reference.frames_rows`) once the
+arrays a frame gives are known — or back through its slot when they differ: nothing large
+is pickled.  The slots are sized on the first frame; a result that outgrows them makes a
+new pool, forked with larger ones.
 
 The pool is kept for one program at a time (running another program on processes, or
 changing a part of this one — a segment, a network's populations, projections, encoders,
@@ -43,7 +45,8 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from backends.reference.frames_memory import packed_bytes, strip_result
+from backends.reference.frames_memory import packed_bytes, restore_result, strip_result
+from backends.reference.frames_rows import Rows
 from backends.reference.frames_workers import FramePool
 
 __all__ = ["close_frame_workers", "has_workers", "map_frames_pooled", "pool_key",
@@ -86,26 +89,30 @@ def slot_bytes_for(inputs: Mapping[str, np.ndarray], result) -> int:
 def map_frames_pooled(program, key: tuple, run_one: Callable, count: int, workers: int,
                       inputs_of: Callable[[int], Mapping[str, np.ndarray]], options,
                       store: Callable[[int, object], None],
-                      progress: Callable[[int, int], None] | None = None) -> bool:
+                      progress: Callable[[int, int], None] | None = None,
+                      rows_made: list[Rows] | None = None) -> bool:
     """Run frames ``0 .. count − 1`` on the pool of worker processes (module docstring).
 
     ``run_one(inputs, options)`` runs one frame; ``store(i, result)`` takes frame ``i``'s
-    result (in the calling process, any order); ``progress(done, count)`` follows every
-    frame.  Returns False, having run nothing, when another thread is using the pool (the
-    caller runs the frames on threads instead).
+    result (in the calling process, any order): views of a row of shared stacks when the
+    workers wrote them there, each :class:`~backends.reference.frames_rows.Rows` of which is
+    appended to ``rows_made`` first (the caller's stacks adopt them:
+    :class:`~backends.reference.frames_run.FrameStack`); ``progress(done, count)`` follows
+    every frame.  Returns False, having run nothing, when another thread is using the pool
+    (the caller runs the frames on threads instead).
     """
     if not _LOCK.acquire(blocking=False):
         return False
     try:
         _run_pooled(program, key, run_one, count, workers, inputs_of, options, store,
-                    progress)
+                    progress, [] if rows_made is None else rows_made)
     finally:
         _LOCK.release()
     return True
 
 
 def _run_pooled(program, key, run_one, count, workers, inputs_of, options, store,
-                progress) -> None:
+                progress, rows_made) -> None:
     finished = [0]
 
     def done() -> None:
@@ -124,13 +131,26 @@ def _run_pooled(program, key, run_one, count, workers, inputs_of, options, store
     if pool is not None and not (pool.matches(program, workers) and _same(key, pool.key)):
         pool.close()
         pool = _CURRENT[0] = None
+    first = None
     if pool is None:  # frame 0 here: it builds the plans the workers inherit
-        first = here(todo.pop(0))
+        first = run_one(inputs_of(todo.pop(0)), options)
         pool = _new_pool(program, key, run_one, workers, slot_bytes_for(inputs_of(0), first))
+        light, arrays = strip_result(first)
+        pool.layout = [(a.shape, a.dtype) for a in arrays]
+    rows = pool.rows(count)
+    if rows is not None:
+        rows_made.append(rows)
+    if first is not None:  # into its rows too, so the stacks are the shared ones
+        if rows is not None:
+            for stack, array in zip(rows.arrays, arrays, strict=True):
+                stack[0] = array
+            first = restore_result(light, rows.row_views(0))
+        store(0, first)
+        done()
     lost: list[int] = []
     try:
         while todo:
-            failed, todo, need = pool.map(todo, inputs_of, options, store, done)
+            failed, todo, need = pool.map(todo, inputs_of, options, store, done, rows)
             lost += failed
             if not need:
                 break

@@ -38,6 +38,7 @@ import numpy as np
 
 from backends.reference.frames_memory import fork_available, private_empty
 from backends.reference.frames_pool import has_workers
+from backends.reference.frames_rows import is_row
 from backends.reference.result import SimResult
 from backends.reference.run_options import RunOptions
 from ir.errors import SimulationError
@@ -104,10 +105,17 @@ class FrameStack:
     ----------
     count : int
         The number of frames.
+    adopt : callable, optional
+        ``adopt(value)``: the stack in shared memory that the first frame's ``value`` is a
+        row of, which worker processes write their frames' rows into
+        (:mod:`backends.reference.frames_rows`); that stack becomes the key's array, and a
+        value that already is its row is not copied.  None (or no such stack): a new array.
     """
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int,
+                 adopt: Callable[[np.ndarray], np.ndarray | None] | None = None) -> None:
         self.count = count
+        self._adopt = adopt
         self._arrays: dict[str, np.ndarray] | None = None
         self._keys: list[str] | None = None
         self._lock = threading.Lock()
@@ -122,9 +130,7 @@ class FrameStack:
         """
         with self._lock:
             if self._arrays is None:
-                self._arrays = {k: private_empty((self.count, *np.shape(v)),
-                                                 np.asarray(v).dtype)
-                                for k, v in values.items()}
+                self._arrays = {k: self._stack_for(np.asarray(v)) for k, v in values.items()}
                 self._keys = list(values)
         arrays = self._arrays
         if set(values) != set(arrays):
@@ -139,9 +145,19 @@ class FrameStack:
                     f"{where}: node {k!r} is {v.dtype}{list(v.shape)} in frame {index} but "
                     f"{out.dtype}{list(out.shape[1:])} in another; a host implementation must "
                     "return the same dtype and shape for every frame", node=k)
-            out[index] = v
+            if not is_row(v, out, index):  # a worker wrote an adopted stack's row itself
+                out[index] = v
         if index == 0:
             self._keys = list(values)
+
+    def _stack_for(self, value: np.ndarray) -> np.ndarray:
+        """The stack of a key whose first frame is ``value``: the shared stack it is a row
+        of (``adopt``), or a new one."""
+        stack = self._adopt(value) if self._adopt is not None else None
+        if stack is not None and stack.shape == (self.count, *value.shape) \
+                and stack.dtype == value.dtype:
+            return stack
+        return private_empty((self.count, *value.shape), value.dtype)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Every key's ``(F, *shape)`` array, in the first frame's key order."""
@@ -157,8 +173,10 @@ class SimStack:
     is put; only the counts stay per frame until :meth:`results`.
     """
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int,
+                 adopt: Callable[[np.ndarray], np.ndarray | None] | None = None) -> None:
         self.count = count
+        self._adopt = adopt
         self._light: list[Sequence[SimResult] | None] = [None] * count
         self._stacks: dict[int, tuple[FrameStack, FrameStack, FrameStack]] = {}
         self._rasters: list[bool] = []
@@ -174,7 +192,7 @@ class SimStack:
         values given there, as the one-frame result shares the array.
         """
         with self._lock:
-            stacks = [self._stacks.setdefault(k, tuple(FrameStack(self.count)
+            stacks = [self._stacks.setdefault(k, tuple(FrameStack(self.count, self._adopt)
                                                        for _ in range(3)))
                       for k in range(len(sims))]
         shared = [[p for p, v in s.outputs.items() if values is not None and values.get(p) is v]

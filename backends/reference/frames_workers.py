@@ -3,13 +3,16 @@
 :class:`FramePool` is the mechanism of :mod:`backends.reference.frames_pool` (which keeps one
 for the program last run on processes and says when to fork a new one).  Each worker has
 :data:`SLOTS` slots (:mod:`backends.reference.frames_memory`), so it runs one frame while
-the parent copies the previous one out: the parent writes a frame's inputs into a free slot
-and sends their header; the worker runs the frame, packs its result's arrays into the same
-slot after the inputs, and sends back their header and the result's light record.  A result
-that does not fit is reported with the bytes it needs; one that holds Python objects comes
-through the pipe; a frame that raises is reported failed (the parent runs it again and
-raises its error).  A worker ignores ``SIGINT``: the parent handles Ctrl-C and ends the
-pool.  The workers end when the pool is closed or its program is freed.
+the parent hands out the next: the parent writes a frame's inputs into a free slot and sends
+their header.  The worker runs the frame and, when the pool knows the arrays a frame gives
+(:attr:`FramePool.layout`) and :meth:`FramePool.rows` made shared stacks for them
+(:mod:`backends.reference.frames_rows`), writes them straight into its row of each and sends
+back only the result's light record; otherwise it packs them into the same slot after the
+inputs and sends their header.  A result that does not fit is reported with the bytes it
+needs; one that holds Python objects comes through the pipe; a frame that raises is reported
+failed (the parent runs it again and raises its error).  A worker ignores ``SIGINT``: the
+parent handles Ctrl-C and ends the pool.  The workers end when the pool is closed or its
+program is freed.
 
 Examples
 --------
@@ -24,6 +27,8 @@ Examples
 >>> pool.map([0, 1, 2], lambda i: {"x": np.full(3, i)}, None,
 ...          lambda i, r: got.__setitem__(i, r.values["y"].tolist()), lambda: None)
 ([], [], 0)
+>>> pool.layout                     # learned from the frames: the next call writes rows
+[((3,), dtype('int64'))]
 >>> pool.close()
 >>> sorted(got.items())
 [(0, [0, 0, 0]), (1, [2, 2, 2]), (2, [4, 4, 4])]
@@ -31,6 +36,7 @@ Examples
 
 from __future__ import annotations
 
+import mmap
 import multiprocessing
 import os
 import signal
@@ -38,6 +44,7 @@ import weakref
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from multiprocessing.connection import wait
+from multiprocessing.reduction import recv_handle, send_handle
 
 import numpy as np
 
@@ -48,6 +55,7 @@ from backends.reference.frames_memory import (
     strip_result,
     unpack_arrays,
 )
+from backends.reference.frames_rows import Layout, Rows, RowStacks
 
 __all__ = ["SLOTS", "FramePool"]
 
@@ -78,6 +86,9 @@ class FramePool:
         self.key, self.workers, self.slot_bytes = key, workers, slot_bytes
         self.owner = os.getpid()
         self.broken = False
+        #: The arrays a frame gives (shapes, dtypes), from the last frame seen; None: unknown.
+        self.layout: Layout | None = None
+        self.row_stacks = RowStacks()
         self._program = weakref.ref(program)
         self.slots = [[shared_empty((slot_bytes,), np.uint8) for _ in range(SLOTS)]
                       for _ in range(workers)]
@@ -92,7 +103,7 @@ class FramePool:
             self.conns.append(here)
             self.children.append(child)
         self._finalizer = weakref.finalize(program, _close, self.conns, self.children,
-                                           self.owner)
+                                           self.owner, self.row_stacks)
 
     def matches(self, program, workers: int) -> bool:
         """Whether this pool, alive in this process, runs ``program`` on ``workers`` workers
@@ -113,15 +124,39 @@ class FramePool:
         self.broken = True
         self._finalizer()
 
+    def rows(self, count: int) -> Rows | None:
+        """Shared stacks of ``count`` rows for :attr:`layout` (None if it is unknown or
+        cannot be shared, :mod:`backends.reference.frames_rows`), sent to every worker."""
+        rows = None if self.layout is None else self.row_stacks.rows(count, self.layout)
+        forget = self.row_stacks.take_dropped()
+        new = self.row_stacks.take_new()
+        try:
+            for conn, child in zip(self.conns, self.children, strict=True):
+                if forget:
+                    conn.send(("forget", forget))
+                for block in new:
+                    conn.send(("map", block.id, block.size))
+                    send_handle(conn, block.fd, child.pid)
+        except OSError:  # a worker is gone: the frames travel through the slots, or run here
+            self.broken = True
+            return None
+        finally:
+            for block in new:
+                block.close_fd()
+        return rows
+
     def map(self, frames: Sequence[int], inputs_of: Callable[[int], Mapping[str, np.ndarray]],
-            options, store: Callable[[int, object], None], done: Callable[[], None]
-            ) -> tuple[list[int], list[int], int]:
+            options, store: Callable[[int, object], None], done: Callable[[], None],
+            rows: Rows | None = None) -> tuple[list[int], list[int], int]:
         """Run ``frames`` on the workers; ``store(i, result)`` and ``done()`` for each done.
 
-        Returns the frames not done (a worker raised or died), the frames not started
-        and the slot bytes a frame needed when it did not fit (0 if every frame fitted: the
-        frames not started then follow a failure, else they need a larger pool).
+        With ``rows`` (:meth:`rows`), a worker writes a frame whose arrays match their
+        layout straight into its row, and ``store`` gets that row's views.  Returns the
+        frames not done (a worker raised or died), the frames not started and the slot
+        bytes a frame needed when it did not fit (0 if every frame fitted: the frames not
+        started then follow a failure, else they need a larger pool).
         """
+        spec = None if rows is None else rows.spec()
         todo = deque(frames)
         busy: dict[tuple[int, int], int] = {}
         lost: list[int] = []
@@ -137,7 +172,7 @@ class FramePool:
                 need, stop = max(need, 2 * end), True
                 return
             i = todo.popleft()
-            self.conns[w].send((i, s, list(inputs), header, end, options))
+            self.conns[w].send((i, s, list(inputs), header, end, options, spec))
             busy[(w, s)] = i
 
         for s in range(SLOTS):
@@ -155,8 +190,12 @@ class FramePool:
                     lost += [busy.pop(k) for k in [k for k in busy if k[0] == w]]
                     continue
                 del busy[(w, s)]
-                if status == "slot":
+                if status == "rows":
+                    store(i, restore_result(light, rows.row_views(i)))
+                    done()
+                elif status == "slot":
                     store(i, restore_result(light, unpack_arrays(payload, self.slots[w][s])))
+                    self.layout = [(shape, dtype) for _, dtype, shape in payload]
                     done()
                 elif status == "pipe":
                     store(i, restore_result(light, payload))
@@ -175,10 +214,11 @@ class FramePool:
         return sorted(lost), sorted(todo), need
 
 
-def _close(conns, children, owner: int) -> None:
+def _close(conns, children, owner: int, row_stacks: RowStacks) -> None:
     """End a pool's workers (only from the process that forked them)."""
     if os.getpid() != owner:
         return
+    row_stacks.close()
     for conn in conns:
         try:
             conn.send(None)
@@ -193,29 +233,53 @@ def _close(conns, children, owner: int) -> None:
 
 
 def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> None:
-    """A worker: run the frames it is sent until told to stop (None) or the parent ends."""
+    """A worker: run the frames it is sent until told to stop (None) or the parent ends.
+
+    Besides frames, the parent sends ``("map", id, size)`` followed by a shared block's
+    file descriptor, and ``("forget", ids)`` for blocks it let go.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for other in inherited:  # the parent's ends: the parent's exit must reach this worker
         other.close()
+    blocks: dict[int, mmap.mmap] = {}
     while True:
         try:
             message = conn.recv()
+            if message is not None and message[0] == "map":
+                fd = recv_handle(conn)
+                blocks[message[1]] = mmap.mmap(fd, message[2])
+                os.close(fd)
+                continue
         except (EOFError, OSError):
             return
         if message is None:
             return
-        i, s, names, header, start, options = message
-        slot = slots[s]
-        try:
-            inputs = dict(zip(names, unpack_arrays(header, slot), strict=True))
-            light, arrays = strip_result(run_one(inputs, options))
-            packed, end = pack_arrays(arrays, slot, start)
-            if packed is not None:
-                reply = (i, s, "slot", light, packed)
-            elif any(a.dtype.hasobject for a in arrays):  # Python objects: through the pipe
-                reply = (i, s, "pipe", light, arrays)
-            else:
-                reply = (i, s, "big", None, end)
-        except Exception:  # noqa: BLE001 - the parent runs the frame again and raises
-            reply = (i, s, "failed", None, None)
-        conn.send(reply)
+        if message[0] == "forget":
+            for block_id in message[1]:
+                blocks.pop(block_id, None)
+            continue
+        conn.send(_run_frame(message, run_one, slots, blocks))
+
+
+def _run_frame(message: tuple, run_one: Callable, slots: Sequence[np.ndarray],
+               blocks: Mapping[int, mmap.mmap]) -> tuple:
+    """One frame in a worker: its reply (index, slot, status, light record, payload)."""
+    i, s, names, header, start, options, spec = message
+    slot = slots[s]
+    try:
+        inputs = dict(zip(names, unpack_arrays(header, slot), strict=True))
+        light, arrays = strip_result(run_one(inputs, options))
+        if spec is not None and len(spec) == len(arrays) and all(
+                block_id in blocks and a.shape == shape[1:] and a.dtype == dtype
+                for (block_id, shape, dtype), a in zip(spec, arrays, strict=True)):
+            for (block_id, shape, dtype), a in zip(spec, arrays, strict=True):
+                np.ndarray(shape, dtype, buffer=blocks[block_id])[i] = a
+            return i, s, "rows", light, None
+        packed, end = pack_arrays(arrays, slot, start)
+        if packed is not None:
+            return i, s, "slot", light, packed
+        if any(a.dtype.hasobject for a in arrays):  # Python objects: through the pipe
+            return i, s, "pipe", light, arrays
+        return i, s, "big", None, end
+    except Exception:  # noqa: BLE001 - the parent runs the frame again and raises
+        return i, s, "failed", None, None

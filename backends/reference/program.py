@@ -377,7 +377,13 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
                         max(1, int(limit) // count), workers=1)
     where = f"program {program.graph.name!r}"
     workers = resolve_workers(options.workers, count)
-    values, peaks, sims = FrameStack(count), FrameStack(count), SimStack(count)
+    rows_made: list = []  # shared stacks the worker processes write rows into (frames_rows)
+
+    def adopt(value: np.ndarray) -> np.ndarray | None:
+        return next((s for rows in rows_made if (s := rows.stack_of(value)) is not None), None)
+
+    values, peaks, sims = (FrameStack(count, adopt), FrameStack(count, adopt),
+                           SimStack(count, adopt))
     normalized: list[list[str]] = [[]]
 
     def run_one(frame_inputs: Mapping[str, np.ndarray], frame_options: RunOptions
@@ -399,7 +405,7 @@ def _run_frames(program: CompiledProgram, inputs: Mapping[str, np.ndarray], coun
     kind = resolve_parallel(options.parallel, workers, program)
     if kind != "processes" or not map_frames_pooled(
             program, pool_key(program, engine, plans), run_one, count, workers, inputs_of,
-            per_frame, store, progress):  # threads (also while another thread has the pool)
+            per_frame, store, progress, rows_made):  # threads (also while another has the pool)
         map_frames(lambda i: store(i, run_one(inputs_of(i), per_frame)), count, workers,
                    progress)
     stacked = values.arrays()
