@@ -157,6 +157,12 @@ class FramePool:
         started then follow a failure, else they need a larger pool).
         """
         spec = None if rows is None else rows.spec()
+        try:  # what every frame of this call shares, once per worker
+            for conn in self.conns:
+                conn.send(("call", options, spec))
+        except OSError:
+            self.broken = True
+            return [], sorted(frames), 0
         todo = deque(frames)
         busy: dict[tuple[int, int], int] = {}
         lost: list[int] = []
@@ -172,7 +178,7 @@ class FramePool:
                 need, stop = max(need, 2 * end), True
                 return
             i = todo.popleft()
-            self.conns[w].send((i, s, list(inputs), header, end, options, spec))
+            self.conns[w].send((i, s, list(inputs), header, end))
             busy[(w, s)] = i
 
         for s in range(SLOTS):
@@ -235,13 +241,15 @@ def _close(conns, children, owner: int, row_stacks: RowStacks) -> None:
 def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> None:
     """A worker: run the frames it is sent until told to stop (None) or the parent ends.
 
-    Besides frames, the parent sends ``("map", id, size)`` followed by a shared block's
-    file descriptor, and ``("forget", ids)`` for blocks it let go.
+    Besides frames, the parent sends ``("call", options, spec)`` before a call's frames,
+    ``("map", id, size)`` followed by a shared block's file descriptor, and ``("forget",
+    ids)`` for blocks it let go.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for other in inherited:  # the parent's ends: the parent's exit must reach this worker
         other.close()
     blocks: dict[int, mmap.mmap] = {}
+    call: tuple = (None, None)  # the options and row spec of the current call
     while True:
         try:
             message = conn.recv()
@@ -254,17 +262,19 @@ def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> N
             return
         if message is None:
             return
-        if message[0] == "forget":
+        if message[0] == "call":
+            call = message[1:]
+        elif message[0] == "forget":
             for block_id in message[1]:
                 blocks.pop(block_id, None)
-            continue
-        conn.send(_run_frame(message, run_one, slots, blocks))
+        else:
+            conn.send(_run_frame(message, *call, run_one, slots, blocks))
 
 
-def _run_frame(message: tuple, run_one: Callable, slots: Sequence[np.ndarray],
-               blocks: Mapping[int, mmap.mmap]) -> tuple:
+def _run_frame(message: tuple, options, spec, run_one: Callable,
+               slots: Sequence[np.ndarray], blocks: Mapping[int, mmap.mmap]) -> tuple:
     """One frame in a worker: its reply (index, slot, status, light record, payload)."""
-    i, s, names, header, start, options, spec = message
+    i, s, names, header, start = message
     slot = slots[s]
     try:
         inputs = dict(zip(names, unpack_arrays(header, slot), strict=True))
