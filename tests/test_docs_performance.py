@@ -146,7 +146,9 @@ def test_the_user_path_goals_say_what_the_recorded_runs_met() -> None:
     text = " ".join(PAGE.read_text(encoding="utf-8").split())
     preset = runs[0]
     assert f"a frames axis of {preset['n_frames_axis']} frames" in text
-    assert f"{preset['workers']} threads (the cores available)" in text
+    assert f"{preset['workers']} workers (the cores available)" in text
+    kinds = {r["parallel"] for r in runs}
+    assert len(kinds) > 1 or f"(`parallel`: {kinds.pop()} in all three runs)" in text
 
 
 @pytest.mark.parametrize("key, cells", _bench_rows(), ids=[k for k, _ in _bench_rows()])
