@@ -90,6 +90,53 @@ def test_a_replaced_part_builds_a_new_plan_and_forget_drops_it():
     assert peek_plan(net, "float64") is None
 
 
+def test_kept_plans_die_with_their_network_and_copies_start_without_them():
+    """A plan refers to its network: kept anywhere but on the network, every network ever
+    run (and its plans, hundreds of MB for a radar chain) would stay alive."""
+    import copy
+    import dataclasses
+    import gc
+    import weakref
+
+    program = compile_graph(_rd_chain(), target=None,
+                            calibration_inputs={"adc": _frames(2, 2)})
+    run_program(program, {"adc": _frames(3, 1)[0]}, out_of_range="clip")
+    net = program.networks[0]
+    plan = peek_plan(net, "float64")
+    assert plan is not None and plan.network is net
+    for twin in (copy.copy(net), copy.deepcopy(net), dataclasses.replace(net)):
+        assert peek_plan(twin, "float64") is None
+    alive = [weakref.ref(x) for x in (program, net, plan)]
+    gc.disable()  # freed at once, by reference counts: no cycle waits for the collector
+    try:
+        del program, net, plan, twin
+        assert [r() for r in alive] == [None, None, None]
+    finally:
+        gc.enable()
+
+
+def test_compiling_with_the_accuracy_check_keeps_no_network_alive():
+    """The check simulates the program it measures; afterwards no network it made (nor
+    their plans) is left behind, however many times one compiles."""
+    import gc
+    import weakref
+
+    from radarsnn import compile_graph as compile_checked  # with the reference simulator
+
+    def networks() -> set[int]:
+        gc.collect()
+        return {id(o) for o in gc.get_objects() if type(o).__name__ == "SpikingNetwork"}
+
+    cal = {"adc": _frames(4, 3)}
+    before, kept = networks(), []
+    for _ in range(2):
+        program = compile_checked(_rd_chain(), "kapoho_point", calibration_inputs=cal)
+        assert program.records.accuracy is not None
+        kept += [weakref.ref(n) for n in program.networks]
+        del program
+    assert networks() <= before and [r() for r in kept] == [None] * len(kept)
+
+
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 5), workers=st.sampled_from([1, 2, 3]))
 def test_frames_on_threads_give_the_bits_of_frame_by_frame(seed, n, workers):
