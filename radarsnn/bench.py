@@ -7,7 +7,10 @@ times, in one run and on the same frame: the conventional chain
 form and in step mode (plans built once, as a long run would), and optionally
 Brian2 on the range S-FT stage.  Each figure is the median of ``repeats`` runs;
 BLAS is limited to ``threads`` threads (1 by default: "one core").  Ratios are
-computed from figures of the same run, never across runs.
+computed from figures of the same run, never across runs.  Brian2 runs last: it builds a few
+GB of synapses per call, and the memory it frees keeps the kernel busy for a while after it
+(on a virtual machine that hands freed pages back to its host), which would slow whatever
+was timed next.
 
 The *floor* (:mod:`backends.reference.floor`) is the dense matrix products the
 closed form must apply — the same shared matrices, as plain numpy products —
@@ -107,6 +110,9 @@ class BenchReport:
     freed_memory_held: bool = False
     #: ``user_s`` / ``system_s``: CPU seconds of the frames-axis timings (getrusage).
     cpu: dict[str, float] = field(default_factory=dict)
+    #: ``{phase: {"user_s", "system_s"}}``: the CPU of each stage of the bench, and
+    #: ``process``: of the whole process when it ended (imports included).
+    cpu_phases: dict[str, dict[str, float]] = field(default_factory=dict)
     #: The chain timed (a preset's range-Doppler chain, or a chain file).
     chain: str = ""
     #: ``os.getloadavg()`` (1, 5, 15 min) before and after the timings.
@@ -160,19 +166,21 @@ class BenchReport:
                          "(goal >= 10 on one core)")
         lines.append(f"  peak RSS of the radarsnn runs {self.peak_rss_gb:.2f} GB (goal <= 2 GB; "
                      "measured before Brian2 runs)")
-        from radarsnn.bench_user import user_path_lines
+        from radarsnn.bench_user import phase_lines, user_path_lines
 
         lines += user_path_lines(self)
+        lines += phase_lines(self.cpu_phases)
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-able figures, ratios and frames/s (``user_path_ratios``: the user's path's)."""
-        from radarsnn.bench_user import user_path_ratios
+        from radarsnn.bench_user import phase_ratios, user_path_ratios
 
         return {**asdict(self), "ratios": self.ratios(), "frames_per_s": self.frames_per_s,
                 "cpu_count": os.cpu_count(),
-                "user_path_ratios": user_path_ratios(self.user_path, self.cpu)}
+                "user_path_ratios": user_path_ratios(self.user_path, self.cpu),
+                "system_over_user_by_phase": phase_ratios(self.cpu_phases)}
 
 
 def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: BenchReport) -> None:
@@ -198,13 +206,18 @@ def _range_stage(config, frame_adc, calibration_adc, repeats: int, report: Bench
     plan = build_plan(net, "float64")
     report.seconds["closed_range_stage"] = median_s(
         lambda: simulate(net, inputs, mode="closed", plan=plan, out_of_range="clip"), repeats)
+    last: dict[str, object] = {}  # the last timed result of each: compared, not rerun
+
+    def kept(name: str, run: Callable[[], object]) -> Callable[[], object]:
+        return lambda: last.__setitem__(name, run())
+
     report.seconds.update(interleaved_medians({  # in turn: one host drift for both
-        "step_range_stage": lambda: simulate(net, inputs, mode="step", plan=plan,
-                                             out_of_range="clip"),
-        "brian2_range_stage": lambda: simulate_brian2(net, inputs, out_of_range="clip")},
+        "step_range_stage": kept("step", lambda: simulate(net, inputs, mode="step", plan=plan,
+                                                          out_of_range="clip")),
+        "brian2_range_stage": kept("brian2", lambda: simulate_brian2(net, inputs,
+                                                                     out_of_range="clip"))},
         max(1, min(repeats, 3))))
-    same = simulate_brian2(net, inputs, out_of_range="clip").spike_counts == simulate(
-        net, inputs, mode="step", out_of_range="clip").spike_counts
+    same = last["brian2"].spike_counts == last["step"].spike_counts
     report.notes.append(f"range stage: 1 rx x {config.n_chirps} chirps x {config.n_samples} "
                         f"samples, {net.n_steps} steps; Brian2 (numpy target) spike counts "
                         f"{'equal' if same else 'DIFFER from'} the step engine's")
@@ -256,6 +269,7 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
     from ir import Graph, evaluate
     from radar.config import preset
     from radar.scene import SCENE_PRESETS, simulate_frame
+    from radarsnn.bench_user import cpu_phase, process_cpu
 
     say = progress or (lambda _s, _m: None)
     config = preset(preset_name)
@@ -268,16 +282,19 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
                          machine=f"{platform.machine()} {platform.processor() or ''} "
                                  f"Python {platform.python_version()}".replace("  ", " "),
                          chain=graph.name if chain is not None else "", load_before=os.getloadavg())
-    program = (compile_graph(graph, None, calibration_inputs={"adc": calibration})
-               if motif is None else _motif_program(graph, motif, calibration, report))
-    say("bench", "compiled")
-    plans = program_plans(program)
+    phases = report.cpu_phases
+    with cpu_phase(phases, "compile"):
+        program = (compile_graph(graph, None, calibration_inputs={"adc": calibration})
+                   if motif is None else _motif_program(graph, motif, calibration, report))
+        say("bench", "compiled")
+        plans = program_plans(program)
     products, rotations = floor_products(plans), rotation_floors(plans)
     report.floor_products = [f"{p.id} ({' x '.join(map(str, p.shape))})" for p in products]
     report.floor_products += [_rotation_text(r) for r in rotations]
     with threadpool_limits(limits=threads):
-        report.seconds["conventional"] = median_s(lambda: evaluate(graph, {"adc": frame}),
-                                                  repeats)
+        with cpu_phase(phases, "conventional"):
+            report.seconds["conventional"] = median_s(lambda: evaluate(graph, {"adc": frame}),
+                                                      repeats)
         say("bench", "conventional done")
         for mode in modes:
             n = repeats if mode != "step" else (step_repeats or repeats)
@@ -285,14 +302,19 @@ def run_bench(preset_name: str = "carrada", *, repeats: int = 5, step_repeats: i
                                                     plans=plans, out_of_range="clip")}
             if mode == "closed" and (products or rotations):  # the floor in turn with it
                 run.update(floor_calls(products, rotations=rotations))
-            report.seconds.update(interleaved_medians(run, n))
+            with cpu_phase(phases, f"{mode} (with its floor)" if len(run) > 1 else mode):
+                report.seconds.update(interleaved_medians(run, n))
             say("bench", f"{mode} done")
         report.peak_rss_gb = _peak_rss_gb()
-        if brian2 and motif is None:
-            _range_stage(config, frame, calibration, repeats, report)
     if user_path:  # run_program as called, then compile with and without the check
         with threadpool_limits(limits=threads):
             _user_path(program, graph, config, scene, frame, repeats, report, say)
+    if brian2 and motif is None:  # last: the GBs it frees keep the kernel busy for a while
+        with threadpool_limits(limits=threads), \
+                cpu_phase(phases, "range stage: closed, step and Brian2"):
+            _range_stage(config, frame, calibration, repeats, report)
+        say("bench", "Brian2 done")
+    report.cpu_phases["process"] = process_cpu()
     report.load_after = os.getloadavg()
     report.notes.append("simulator figures exclude compilation and plan building (done once)")
     return report
@@ -350,11 +372,13 @@ def _user_path(program, graph, config, scene, frame, repeats: int, report: Bench
     import numpy as np
 
     from radar.scene import simulate_frame
-    from radarsnn.bench_user import N_FRAMES, time_compile, time_user_path
+    from radarsnn.bench_user import N_FRAMES, cpu_phase, time_compile, time_user_path
 
     frames = np.stack([chain_inputs(graph, simulate_frame(config, scene, seed=s).adc)
                        for s in range(N_FRAMES)])
-    time_user_path(program, frame, frames, repeats, report, interleaved_medians)
+    with cpu_phase(report.cpu_phases, "user's path: run_program and the host's threads"):
+        time_user_path(program, frame, frames, repeats, report, interleaved_medians)
     say("bench", "user's path done")
-    time_compile(graph, frames[1:4], repeats, report, interleaved_medians)
+    with cpu_phase(report.cpu_phases, "user's path: compile with and without the check"):
+        time_compile(graph, frames[1:4], repeats, report, interleaved_medians)
     say("bench", "compile done")

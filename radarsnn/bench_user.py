@@ -45,12 +45,14 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import resource
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
-__all__ = ["GOALS", "time_compile", "time_user_path", "user_path_lines", "user_path_ratios"]
+__all__ = ["GOALS", "cpu_phase", "phase_lines", "phase_ratios", "time_compile",
+           "time_user_path", "user_path_lines", "user_path_ratios"]
 
 #: ``medians({name: fn}, repeats) -> {name: seconds}``, each fn timed in turn.
 Medians = Callable[[dict[str, Callable[[], object]], int], dict[str, float]]
@@ -74,6 +76,52 @@ def _cpu() -> tuple[float, float]:
     c = resource.getrusage(resource.RUSAGE_CHILDREN)
     user, system = workers_cpu_s()
     return r.ru_utime + c.ru_utime + user, r.ru_stime + c.ru_stime + system
+
+
+@contextlib.contextmanager
+def cpu_phase(phases: dict[str, dict[str, float]], name: str) -> Iterator[None]:
+    """Add the user and system CPU seconds spent inside the block (this process, its ended
+    children and its live worker processes) to ``phases[name]``."""
+    before = _cpu()
+    try:
+        yield
+    finally:
+        after = _cpu()
+        got = phases.setdefault(name, {"user_s": 0.0, "system_s": 0.0})
+        got["user_s"] += after[0] - before[0]
+        got["system_s"] += after[1] - before[1]
+
+
+def process_cpu() -> dict[str, float]:
+    """User and system CPU seconds of the whole process so far (imports included), its
+    ended children and live worker processes."""
+    user, system = _cpu()
+    return {"user_s": user, "system_s": system}
+
+
+def phase_ratios(phases: dict[str, dict[str, float]]) -> dict[str, float]:
+    """``system_s / user_s`` of every phase that spent user time.
+
+    Examples
+    --------
+    >>> phase_ratios({"closed": {"user_s": 2.0, "system_s": 0.1}, "x": {"user_s": 0.0,
+    ...                                                                  "system_s": 0.0}})
+    {'closed': 0.05}
+    """
+    return {k: v["system_s"] / v["user_s"] for k, v in phases.items() if v["user_s"] > 0}
+
+
+def phase_lines(phases: dict[str, dict[str, float]]) -> list[str]:
+    """The table lines of the CPU by phase (empty when none was measured)."""
+    if not phases:
+        return []
+    lines = [f"  CPU by phase (this process, children, workers) {'user s':>9} {'system s':>9} "
+             f"{'sys/user':>9}"]
+    ratios = phase_ratios(phases)
+    for k, v in phases.items():
+        lines.append(f"  {k:<47} {v['user_s']:>9.2f} {v['system_s']:>9.2f} "
+                     f"{ratios.get(k, float('nan')):>9.2f}")
+    return lines
 
 
 def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int, report,

@@ -70,6 +70,14 @@ def test_bench_cli_json(capsys):
     assert doc["preset"] == "seed003" and "closed" in doc["frames_per_s"]
     assert {"floor", "floor_core"} <= set(doc["seconds"]) and "closed_over_floor" in doc["ratios"]
     assert len(doc["load_before"]) == 3 and doc["cpu_count"] >= 1
+    # every stage's CPU, and the whole process's, each with its system / user
+    phases = doc["cpu_phases"]
+    assert set(phases) == {"compile", "conventional", "closed (with its floor)", "process"}
+    assert all(set(v) == {"user_s", "system_s"} for v in phases.values())
+    assert all(v["user_s"] >= 0 and v["system_s"] >= 0 for v in phases.values())
+    assert phases["process"]["user_s"] >= sum(v["user_s"] for k, v in phases.items()
+                                              if k != "process")
+    assert set(doc["system_over_user_by_phase"]) <= set(phases)
 
 
 def test_bench_motif_resonator_times_the_resonator_chain_against_its_rotations(capsys):

@@ -11,13 +11,18 @@ same threshold.  Until then every frame pays the kernel again: page faults, zero
 with threads, the mappings given back while the other thread runs.  That is the *system*
 CPU time ``radarsnn bench`` reports.
 
-:func:`hold_freed_memory` sets both thresholds to the values glibc's rule reaches
-(``mallopt(M_MMAP_THRESHOLD, 32 MiB)``, ``mallopt(M_TRIM_THRESHOLD, 64 MiB)``, as the
-``MALLOC_MMAP_THRESHOLD_`` / ``MALLOC_TRIM_THRESHOLD_`` environment variables would at
-start-up), so a frame reuses the memory the previous frame freed.  It changes how the
-*whole process* allocates — a heap keeps up to 64 MiB of freed memory for reuse instead of
-returning it — so the library never calls it on its own: the ``radarsnn`` command calls it
-when it starts (it owns its process), and a program that runs many frames calls it once.
+:func:`hold_freed_memory` sets the mmap threshold to the most glibc's rule reaches
+(``mallopt(M_MMAP_THRESHOLD, 32 MiB)``) and the trim threshold above what glibc's rule would
+give (``mallopt(M_TRIM_THRESHOLD, 256 MiB)``, not 64 MiB), as the ``MALLOC_MMAP_THRESHOLD_`` /
+``MALLOC_TRIM_THRESHOLD_`` environment variables would at start-up, so a frame reuses the
+memory the previous frame freed.  The trim threshold is above the working set of one call of
+the step engine or of a compile on a radar frame (about 100 MB, in and out of the heap a few
+times a call): at 64 MiB the heap gave it back to the kernel and faulted it in again every
+call (about 17 000 page faults per step-mode frame of the carrada preset; none at 256 MiB).
+It changes how the *whole process* allocates — a heap keeps up to 256 MiB of freed memory for
+reuse instead of returning it — so the library never calls it on its own: the ``radarsnn``
+command calls it when it starts (it owns its process), and a program that runs many frames
+calls it once.
 Results are the same bit for bit either way; only where the memory comes from changes.
 On a C library other than glibc (macOS, Windows, musl) it does nothing and says so.
 
@@ -28,7 +33,7 @@ Examples
 >>> isinstance(done, bool), held() == want
 (True, True)
 >>> MMAP_THRESHOLD_BYTES, TRIM_THRESHOLD_BYTES
-(33554432, 67108864)
+(33554432, 268435456)
 """
 
 from __future__ import annotations
@@ -47,8 +52,9 @@ _log = logging.getLogger(__name__)
 #: glibc's ``DEFAULT_MMAP_THRESHOLD_MAX`` on 64-bit systems: the most its own rule raises the
 #: mmap threshold to.
 MMAP_THRESHOLD_BYTES = 32 * 2**20
-#: Twice the mmap threshold, as glibc's rule sets the trim threshold.
-TRIM_THRESHOLD_BYTES = 2 * MMAP_THRESHOLD_BYTES
+#: Above the working set of a step-mode frame or a compile (module docstring); glibc's own
+#: rule stops at twice the mmap threshold.
+TRIM_THRESHOLD_BYTES = 256 * 2**20
 #: ``mallopt`` parameters of ``<malloc.h>``.
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
 #: The thresholds :func:`hold_freed_memory` set in this process (None: never called, or not glibc).
