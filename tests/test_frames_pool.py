@@ -104,6 +104,18 @@ def test_workers_cpu_time_is_counted(program):
     assert sum(workers_cpu_s()) > before
 
 
+@pytest.mark.skipif(not hasattr(os, "sched_getaffinity")
+                    or len(os.sched_getaffinity(0)) < 2, reason="needs two cores to bind")
+def test_workers_are_bound_to_cores_of_their_own(program):
+    from backends.reference.frames_workers import worker_cores
+
+    _check(program, _frames(3, 4))
+    allowed = sorted(os.sched_getaffinity(0))
+    bound = [os.sched_getaffinity(pid) for pid in _pids()]
+    assert bound == [{allowed[0]}, {allowed[1]}] and _CURRENT[0].cores == allowed[:2]
+    assert worker_cores(len(allowed) + 1) == [None] * (len(allowed) + 1)
+
+
 def test_ctrl_c_in_progress_ends_the_pool_and_the_next_call_works(program):
     def interrupt(done, total):
         if done == 2:

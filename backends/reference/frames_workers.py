@@ -14,6 +14,15 @@ failed (the parent runs it again and raises its error).  A worker ignores ``SIGI
 parent handles Ctrl-C and ends the pool.  The workers end when the pool is closed or its
 program is freed.
 
+When there are at least as many cores as workers (those the process may run on,
+``os.sched_getaffinity``), each worker is bound to a core of its own (:func:`worker_cores`).
+The parent wakes the workers through their pipes, and the kernel tends to run a task it
+wakes on the waking task's core; unbound, two workers woken together start on one core and
+wait to be moved apart.  The gain is small: a frames axis of the carrada preset on two
+workers ran 1.75 to 1.84 times as fast as on one (median 1.77, eight runs of seven pairs of
+calls) bound, and 1.68 to 1.83 times (median 1.74) unbound, on a quiet 2-core machine.  With
+more workers than cores they are left to the scheduler.
+
 Examples
 --------
 >>> import numpy as np
@@ -36,6 +45,7 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import mmap
 import multiprocessing
 import os
@@ -57,10 +67,29 @@ from backends.reference.frames_memory import (
 )
 from backends.reference.frames_rows import Layout, Rows, RowStacks
 
-__all__ = ["SLOTS", "FramePool"]
+__all__ = ["SLOTS", "FramePool", "worker_cores"]
 
 #: Slots per worker: one frame runs while the parent copies the previous one out.
 SLOTS = 2
+
+
+def worker_cores(workers: int) -> list[int | None]:
+    """The core each of ``workers`` workers is bound to (None: not bound; module docstring).
+
+    Examples
+    --------
+    >>> cores = worker_cores(1)
+    >>> len(cores) == 1 and (cores[0] is None or isinstance(cores[0], int))
+    True
+    >>> worker_cores(10_000) == [None] * 10_000   # more workers than cores: none bound
+    True
+    """
+    if not hasattr(os, "sched_getaffinity") or not hasattr(os, "sched_setaffinity"):
+        return [None] * workers
+    cores = sorted(os.sched_getaffinity(0))
+    if workers > len(cores):
+        return [None] * workers
+    return cores[:workers]
 
 
 class FramePool:
@@ -94,10 +123,13 @@ class FramePool:
                       for _ in range(workers)]
         context = multiprocessing.get_context("fork")
         self.conns, self.children = [], []
+        #: The core each worker is bound to (None: not bound).
+        self.cores = worker_cores(workers)
         for w in range(workers):
             here, there = context.Pipe(duplex=True)
             child = context.Process(target=_serve, name=f"radarsnn-frames-{w}", daemon=True,
-                                    args=(there, [*self.conns, here], run_one, self.slots[w]))
+                                    args=(there, [*self.conns, here], run_one, self.slots[w],
+                                          self.cores[w]))
             child.start()
             there.close()
             self.conns.append(here)
@@ -238,14 +270,19 @@ def _close(conns, children, owner: int, row_stacks: RowStacks) -> None:
             child.join()
 
 
-def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray]) -> None:
-    """A worker: run the frames it is sent until told to stop (None) or the parent ends.
+def _serve(conn, inherited, run_one: Callable, slots: Sequence[np.ndarray],
+           core: int | None = None) -> None:
+    """A worker: run the frames it is sent until told to stop (None) or the parent ends
+    (bound to ``core`` if one is given).
 
     Besides frames, the parent sends ``("call", options, spec)`` before a call's frames,
     ``("map", id, size)`` followed by a shared block's file descriptor, and ``("forget",
     ids)`` for blocks it let go.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if core is not None:
+        with contextlib.suppress(OSError):  # a core taken away since: run where allowed
+            os.sched_setaffinity(0, {core})
     for other in inherited:  # the parent's ends: the parent's exit must reach this worker
         other.close()
     blocks: dict[int, mmap.mmap] = {}
