@@ -147,7 +147,7 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
     report.workers, report.n_frames_axis = workers, len(frames)
     report.parallel = default_parallel()
     report.freed_memory_held = held() is not None
-    spent: dict[str, np.ndarray] = {}
+    spent: dict[str, dict[str, float]] = {}
 
     def counted(kind: str, run: Callable[[], object]) -> Callable[[], object]:
         calls = [0]
@@ -155,11 +155,8 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
         def call() -> object:  # each series' own CPU seconds, however the calls interleave
             series = "warmup" if calls[0] == 0 else kind  # the first call forks the workers
             calls[0] += 1
-            before = np.array(_cpu())
-            try:
+            with cpu_phase(spent, series):
                 return run()
-            finally:
-                spent[series] = spent.get(series, 0.0) + np.array(_cpu()) - before
         return call
 
     per_call = medians({
@@ -172,8 +169,8 @@ def time_user_path(program, frame: np.ndarray, frames: np.ndarray, repeats: int,
         repeats)
     report.user_path.update({k: v / len(frames) for k, v in per_call.items()})
     for series, prefix in (("default", ""), ("threads", "threads_"), ("warmup", "warmup_")):
-        user, system = spent.get(series, np.zeros(2))
-        report.cpu.update({f"{prefix}user_s": float(user), f"{prefix}system_s": float(system)})
+        got = spent.get(series, {"user_s": 0.0, "system_s": 0.0})
+        report.cpu.update({prefix + k: v for k, v in got.items()})
     report.user_path.update(_host_threads(workers, repeats, medians))
 
 

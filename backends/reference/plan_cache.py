@@ -81,10 +81,7 @@ class _Shelf:
         self.joined[plan.arithmetic] = weakref.ref(plan)
         return plan
 
-    def __copy__(self) -> _Shelf:
-        return _Shelf()
-
-    def __deepcopy__(self, memo: dict) -> _Shelf:
+    def __deepcopy__(self, memo: dict) -> _Shelf:  # the plans are not copied with the network
         return _Shelf()
 
     def __reduce__(self) -> tuple:
